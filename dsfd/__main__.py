@@ -1,0 +1,3 @@
+from dsfd.cli import main
+
+raise SystemExit(main())
