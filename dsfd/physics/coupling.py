@@ -1,0 +1,299 @@
+"""One coupled thermal–airflow step of the lumped network (physics §9–§12, errata E2/E8/E9).
+
+Internals of :class:`dsfd.physics.model.LumpedModel`, kept in their own module so the
+model file stays readable. Everything is batched over a leading dimension B.
+
+1. radiative conductances are linearised (secant form) at x_k and the network without
+   airflow is assembled once (``L0, q0``);
+2. implicit coupling (default): the cavity temperature T that sets the air densities is
+   the fixed point of Φ(T) = x5 at the END of the step with the flows ṁ(T) (E9);
+   ping-pong (paper's option): flows from x5 at the start of each sub-step;
+3. the exact ZOH gives x_{k+1} and the exact step average x̄ (E8), from which the heat
+   flows of the step follow (§12, E2).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from dsfd.physics.airflow import IB, IT, AirflowGeometry, FlowState
+from dsfd.physics.constants import SIGMA
+from dsfd.physics.network import X5, Boundary, assemble, boundary_heat_in
+from dsfd.physics.regimes import FlowSetup, PathFlow, inflow, opening_flows, path_flows
+from dsfd.physics.rootfind import solve_fixed_point
+from dsfd.physics.zoh import Modal, modal, modal_state, modal_step, zoh_vanloan
+
+#: Conductance tying the louver node to the cavity air when a panel has no louver
+#: [W/(m2 K)]; with the tiny capacity below, the node just follows x5 (τ = 0.1 s).
+NO_LOUVER_LINK = 10.0
+NO_LOUVER_CAPACITY = 1.0
+
+
+class StepInputs(NamedTuple):
+    """Exogenous inputs of one step; fields broadcast over the batch shape.
+
+    Attributes
+    ----------
+    t_out_k, t_in_k, t_mrt_k : [K]
+        Outdoor air, room air and room mean radiant temperature.
+    t_rad_out_k : [K]
+        Effective exterior radiant temperature of the façade (sky and ground, §6.1).
+    p_atm_pa : [Pa]
+    wind_ms : [m/s]
+        Local wind speed at the façade.
+    cp_bottom, cp_top : [-]
+        Wind pressure coefficients of the bottom and top openings.
+    sources : (..., 4), [W/m2]
+        Absorbed short-wave in L1, L2, L3 and the louver (node order, errata E3).
+    lw_exchange : (..., 3), [-]
+        Cavity long-wave exchange factors (R_14, R_12, R_42) of physics §6.2.
+    q_trans_wm2 : [W/m2]
+        Solar short-wave transmitted into the room per m² façade.
+    q_da_w : [W]
+        Daylighting benefit Q_DA of the step.
+    """
+
+    t_out_k: np.ndarray
+    t_in_k: np.ndarray
+    t_mrt_k: np.ndarray
+    t_rad_out_k: np.ndarray
+    p_atm_pa: np.ndarray
+    wind_ms: np.ndarray
+    cp_bottom: np.ndarray
+    cp_top: np.ndarray
+    sources: np.ndarray
+    lw_exchange: np.ndarray
+    q_trans_wm2: np.ndarray
+    q_da_w: np.ndarray
+
+    def broadcast(self, shape: tuple[int, ...]) -> StepInputs:
+        """Every field broadcast to ``shape`` (plus its own trailing vector axis)."""
+        out = []
+        for name, v in zip(self._fields, self, strict=True):
+            v = np.asarray(v, float)
+            trail = v.shape[-1:] if name in _VECTOR_FIELDS else ()
+            out.append(np.broadcast_to(v, (*shape, *trail)))
+        return StepInputs(*out)
+
+    def at(self, index: tuple) -> StepInputs:
+        """Index every field with ``index`` (e.g. ``(slice(None), k)`` for step k)."""
+        return StepInputs(*(v[index] for v in self))
+
+
+_VECTOR_FIELDS = ("sources", "lw_exchange")
+
+
+class StepResult(NamedTuple):
+    """One coupled step for a batch (arrays (B,) unless noted).
+
+    Attributes
+    ----------
+    x_next, x_mean : (B, 6), [K]
+        State at the end of the step and its exact average over the step.
+    flow : FlowState
+        Mass flows (B, 4), realised regime label, cavity volume flow.
+    v_cav_ms : [m/s]
+        Signed mean cavity velocity Q_cav/(D·W) (errata E12; probes read |v|).
+    q_cv_rd_w, q_sol_w, q_air_w, q_da_w : [W]
+        Step-average heat flows into the room (physics §12, errata E2).
+    heat_in_wm2 : [W/m2]
+        Net heat entering the network (energy balance of errata E18).
+    evaluations : int
+        Coupled evaluations used by the fixed point.
+    converged : bool
+    """
+
+    x_next: np.ndarray
+    x_mean: np.ndarray
+    flow: FlowState
+    v_cav_ms: np.ndarray
+    q_cv_rd_w: np.ndarray
+    q_sol_w: np.ndarray
+    q_air_w: np.ndarray
+    q_da_w: np.ndarray
+    heat_in_wm2: np.ndarray
+    evaluations: np.ndarray
+    converged: np.ndarray
+
+
+@dataclass(frozen=True)
+class NetworkConstants:
+    """Fixed data of one panel's network and the coupling options (per m² façade)."""
+
+    capacity: np.ndarray  # (6,) [J/(m2 K)]
+    slat_area_ratio: float  # a_L = 2w/s [-]; 0 without louver
+    has_louver: bool
+    eps_l1_front: float
+    eps_l3_back: float
+    h_r23_factor: float  # 1/(1/ε_2b + 1/ε_3f − 1)
+    geom: AirflowGeometry
+    dt: float  # [s]
+    cp_air: float  # [J/(kg K)]
+    coupling: str
+    substeps: int
+    tol_k: float
+    max_evals: int
+    zoh: str
+    q_air_basis: str
+
+
+def secant(t_a: np.ndarray, t_b: np.ndarray) -> np.ndarray:
+    """σ(T_a² + T_b²)(T_a + T_b) [W/(m2 K4)]: secant slope of σT⁴ between T_a and T_b."""
+    return SIGMA * (t_a * t_a + t_b * t_b) * (t_a + t_b)
+
+
+def frozen_network(nc: NetworkConstants, x: np.ndarray, inp: StepInputs,
+                   theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, Boundary]:
+    """L0, q0 without airflow, radiative conductances linearised at x (§9.2, §14)."""
+    h_out, h1, h2, h3, h4, h_in = (theta[:, i] for i in range(6))
+    # Secant radiative slopes of the pairs (x2,x3) (x1,x4) (x1,x2) (x4,x2) (x1,T_rad) (x3,T_mrt)
+    t_a = np.stack([x[:, 1], x[:, 0], x[:, 0], x[:, 3], x[:, 0], x[:, 2]], axis=-1)
+    t_b = np.stack([x[:, 2], x[:, 3], x[:, 1], x[:, 1], inp.t_rad_out_k, inp.t_mrt_k], axis=-1)
+    sec = secant(t_a, t_b)
+    lw = inp.lw_exchange
+    louver_link = nc.slat_area_ratio * h2 if nc.has_louver else np.full_like(h2, NO_LOUVER_LINK)
+    cond = np.stack([h1, louver_link, h3, h4, h4, nc.h_r23_factor * sec[:, 0],
+                     lw[:, 0] * sec[:, 1], lw[:, 1] * sec[:, 2], lw[:, 2] * sec[:, 3]], axis=-1)
+    zero = np.zeros_like(h1)
+    bnd = Boundary(
+        h_out=h_out,
+        h_rad_out=nc.eps_l1_front * sec[:, 4],
+        h_in=h_in,
+        h_rad_in=nc.eps_l3_back * sec[:, 5],
+        g_adv=zero,
+        t_out=inp.t_out_k,
+        t_rad_out=inp.t_rad_out_k,
+        t_in=inp.t_in_k,
+        t_mrt=inp.t_mrt_k,
+        t_inflow=zero,
+    )
+    lap, q = assemble(cond, bnd, inp.sources)
+    return lap, q, bnd
+
+
+def with_flow(nc: NetworkConstants, t5: np.ndarray, setup: FlowSetup, lap0: np.ndarray,
+              q0: np.ndarray) -> tuple[np.ndarray, np.ndarray, PathFlow, np.ndarray, np.ndarray]:
+    """L, q with the airflow evaluated at cavity temperature ``t5`` (arrays of one batch).
+
+    Returns L, q, the path flows, the advective conductance c_p ṁ_in/A_f [W/(m2 K)] and the
+    mixed inflow temperature [K].
+    """
+    pf = path_flows(setup, t5, nc.geom)
+    m_in, t_inflow = inflow(setup, pf)
+    g_adv = nc.cp_air * m_in / nc.geom.facade_area_m2
+    lap = lap0.copy()
+    q = q0.copy()
+    lap[:, X5, X5] -= g_adv
+    q[:, X5] += g_adv * t_inflow
+    return lap, q, pf, g_adv, t_inflow
+
+
+def q_air(nc: NetworkConstants, m_dot: np.ndarray, x5_mean: np.ndarray,
+          inp: StepInputs) -> np.ndarray:
+    """Q_air of the step [W] (errata E2): a = ṁ cavity → room, b = ṁ room → cavity.
+
+    ventilation_credit: c_p [min(a,b)(T5 − T_i) + max(0, a − b)(T5 − T_o)]
+    make_up_loss:       c_p [a (T5 − T_i) + max(0, b − a)(T_o − T_i)]
+    """
+    m_ib, m_it = m_dot[:, IB], m_dot[:, IT]
+    b = np.maximum(m_ib, 0) + np.maximum(m_it, 0)
+    a = np.maximum(-m_ib, 0) + np.maximum(-m_it, 0)
+    if nc.q_air_basis == "ventilation_credit":
+        return nc.cp_air * (np.minimum(a, b) * (x5_mean - inp.t_in_k)
+                            + np.maximum(0.0, a - b) * (x5_mean - inp.t_out_k))
+    return nc.cp_air * (a * (x5_mean - inp.t_in_k)
+                        + np.maximum(0.0, b - a) * (inp.t_out_k - inp.t_in_k))
+
+
+def coupled_step(nc: NetworkConstants, x: np.ndarray, inp: StepInputs, theta: np.ndarray,
+                 setup: FlowSetup, t5_guess: np.ndarray | None = None) -> StepResult:
+    """Advance states ``x`` (B, 6) by one step with prepared inputs and flow setup.
+
+    ``t5_guess`` [K] starts the coupling fixed point (default: x5 at the start of the step).
+    """
+    lap0, q0, bnd0 = frozen_network(nc, x, inp, theta)
+    if nc.coupling == "ping_pong":
+        return _ping_pong(nc, x, inp, lap0, q0, bnd0, setup)
+    nb = x.shape[0]
+    out_flow, out_rho, out_g, out_tin = np.zeros(nb), np.zeros(nb), np.zeros(nb), np.zeros(nb)
+    out_m9 = np.zeros((nb, 4)) if setup.any_all_open else None
+    exact = nc.zoh == "eig"
+    lam, vec, x_star = np.empty((nb, 6)), np.empty((nb, 6, 6)), np.empty((nb, 6))
+    x_next, x_mean = np.empty((nb, 6)), np.empty((nb, 6))
+
+    def phi(t5: np.ndarray, rows: np.ndarray) -> np.ndarray:
+        whole = rows.size == nb
+        sub = setup if whole else setup.take(rows)
+        lap, q, pf, g, tin = with_flow(nc, t5, sub, lap0 if whole else lap0[rows],
+                                       q0 if whole else q0[rows])
+        out_flow[rows], out_rho[rows], out_g[rows], out_tin[rows] = pf.flow, pf.rho_c, g, tin
+        if out_m9 is not None and sub.any_all_open:
+            out_m9[rows[sub.rows_all_open]] = pf.m_all_open
+        if exact:
+            md = modal(lap, q, nc.capacity)
+            lam[rows], vec[rows], x_star[rows] = md.lam, md.vec, md.x_steady
+            return modal_state(md, x[rows], nc.dt, node=X5)
+        cap = nc.capacity
+        st = zoh_vanloan(lap / cap[:, None], q / cap, x[rows], nc.dt)
+        x_next[rows], x_mean[rows] = st.x_next, st.x_mean
+        return st.x_next[:, X5]
+
+    t0 = x[:, X5] if t5_guess is None else t5_guess
+    fp = solve_fixed_point(phi, t0, tol=nc.tol_k, max_evals=nc.max_evals)
+    if exact:
+        r = 1.0 / np.sqrt(nc.capacity)
+        x_next, x_mean, _ = modal_step(Modal(lam, vec, r, x_star), x, nc.dt)
+    m9 = out_m9[setup.rows_all_open] if out_m9 is not None else np.zeros((0, 4))
+    flow = opening_flows(setup, PathFlow(out_flow, out_rho, m9))
+    bnd = bnd0._replace(g_adv=out_g, t_inflow=out_tin)
+    return _result(nc, x_next, x_mean, flow, inp, bnd, fp.evaluations, fp.converged)
+
+
+def _ping_pong(nc: NetworkConstants, x, inp, lap0, q0, bnd0, setup) -> StepResult:
+    """Paper's coupling: flows from the cavity temperature at the start of each sub-step."""
+    nb = x.shape[0]
+    n_sub = nc.substeps
+    dt = nc.dt / n_sub
+    xs = x.copy()
+    mean = np.zeros_like(x)
+    m_acc, q_acc, g_acc, gt_acc, air_acc = (np.zeros((nb, 4)), np.zeros(nb), np.zeros(nb),
+                                            np.zeros(nb), np.zeros(nb))
+    label = np.zeros(nb, dtype=int)
+    for _ in range(n_sub):
+        lap, q, pf, g, tin = with_flow(nc, xs[:, X5], setup, lap0, q0)
+        fs = opening_flows(setup, pf)
+        st = modal_step(modal(lap, q, nc.capacity), xs, dt)
+        mean += st.x_mean / n_sub
+        m_acc += fs.m_dot / n_sub
+        q_acc += fs.q_cav / n_sub
+        g_acc += g / n_sub
+        gt_acc += g * tin / n_sub
+        air_acc += q_air(nc, fs.m_dot, st.x_mean[:, X5], inp) / n_sub
+        xs, label = st.x_next, fs.label
+    tin = np.where(g_acc > 0, gt_acc / np.where(g_acc > 0, g_acc, 1.0), inp.t_in_k)
+    bnd = bnd0._replace(g_adv=g_acc, t_inflow=tin)
+    return _result(nc, xs, mean, FlowState(m_acc, label, q_acc), inp, bnd,
+                   np.full(nb, n_sub), np.ones(nb, bool), air=air_acc)
+
+
+def _result(nc: NetworkConstants, x_next, x_mean, flow, inp, bnd, evals, conv,
+            air=None) -> StepResult:
+    a_f = nc.geom.facade_area_m2
+    x3 = x_mean[:, 2]
+    q_cv_rd = a_f * (bnd.h_in * (x3 - inp.t_in_k) + bnd.h_rad_in * (x3 - inp.t_mrt_k))
+    return StepResult(
+        x_next=x_next,
+        x_mean=x_mean,
+        flow=flow,
+        v_cav_ms=flow.q_cav / nc.geom.cavity_area_m2,
+        q_cv_rd_w=q_cv_rd,
+        q_sol_w=a_f * inp.q_trans_wm2,
+        q_air_w=q_air(nc, flow.m_dot, x_mean[:, X5], inp) if air is None else air,
+        q_da_w=inp.q_da_w,
+        heat_in_wm2=boundary_heat_in(x_mean, bnd, inp.sources),
+        evaluations=evals,
+        converged=conv,
+    )

@@ -1,0 +1,263 @@
+"""Exogenous inputs of the lumped model: weather → façade boundary and optical loads.
+
+Two stages, both pure and vectorised over time steps:
+
+* :func:`facade_forcing` turns measured weather at the step midpoints (errata E19.2) into
+  the façade boundary: sun position, plane-of-façade beam and diffuse irradiance (Erbs
+  decomposition where DNI/DHI are not measured, Hay–Davies or isotropic transposition,
+  physics §4), the exterior radiant temperature (sky model, §6.1), the local wind speed
+  (power-law profile, §7.2) and the wind pressure coefficients of the openings (§8.2).
+* :class:`FacadeOptics` adds what depends on the louver angle φ: absorbed short-wave per
+  node (§5.4, E3), the cavity long-wave exchange factors (§6.2), the transmitted solar
+  gain and the daylighting benefit Q_DA (§12.4), for any array of louver angles at once.
+
+:func:`step_inputs` joins the two into the :class:`~dsfd.physics.coupling.StepInputs` the
+model steps with.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from dsfd.config.panel import PanelConfig
+from dsfd.physics.airflow import AirflowGeometry
+from dsfd.physics.constants import T_ZERO
+from dsfd.physics.coupling import StepInputs
+from dsfd.physics.longwave import (
+    cavity_exchange_matrix,
+    exterior_radiant_temperature,
+    sky_temperature_clark_allen,
+    sky_temperature_swinbank,
+)
+from dsfd.physics.optics import NO_LOUVER, LouverOptics, glass_triples, layer_absorption
+from dsfd.physics.solar import erbs, extraterrestrial_irradiance, facade_irradiance, solar_position
+
+#: Wind-profile exponent a and boundary-layer thickness δ [m] by terrain (EnergyPlus
+#: Engineering Reference, "Local Wind Speed Calculations"); the met station is "flat".
+TERRAIN_PROFILE = {"ocean": (0.10, 210.0), "flat": (0.14, 270.0), "rough": (0.22, 370.0),
+                   "city": (0.33, 460.0)}
+MET_HEIGHT_M = 10.0
+
+
+class WeatherInputs(NamedTuple):
+    """Weather at the step midpoints (arrays (n,), SI units, kelvin).
+
+    Attributes
+    ----------
+    time_s : [s]
+        UTC unix time of each step's midpoint.
+    t_out_k : [K]
+    ghi_wm2, dni_wm2, dhi_wm2 : [W/m2]
+        NaN in DNI/DHI means "not measured": Erbs decomposes GHI there.
+    wind_speed_ms : [m/s]
+        At the 10 m met mast.
+    wind_dir_deg : [deg]
+        Direction the wind comes from, clockwise from north.
+    pressure_pa : [Pa]
+    t_in_k, t_mrt_k : [K]
+        Room air and mean radiant temperature.
+    t_dew_k : [K]
+        Dew point (NaN if unknown; only the Clark–Allen sky model uses it).
+    """
+
+    time_s: np.ndarray
+    t_out_k: np.ndarray
+    ghi_wm2: np.ndarray
+    dni_wm2: np.ndarray
+    dhi_wm2: np.ndarray
+    wind_speed_ms: np.ndarray
+    wind_dir_deg: np.ndarray
+    pressure_pa: np.ndarray
+    t_in_k: np.ndarray
+    t_mrt_k: np.ndarray
+    t_dew_k: np.ndarray
+
+
+class Forcing(NamedTuple):
+    """Façade boundary per step (arrays (n,)), independent of the controls."""
+
+    time_s: np.ndarray
+    t_out_k: np.ndarray
+    t_in_k: np.ndarray
+    t_mrt_k: np.ndarray
+    t_rad_out_k: np.ndarray
+    p_atm_pa: np.ndarray
+    wind_ms: np.ndarray  # local, façade height [m/s]
+    cp_bottom: np.ndarray
+    cp_top: np.ndarray
+    zenith_deg: np.ndarray
+    azimuth_deg: np.ndarray
+    aoi_deg: np.ndarray
+    profile_deg: np.ndarray
+    beam_wm2: np.ndarray  # on the façade plane
+    diffuse_wm2: np.ndarray  # sky + ground on the façade plane
+    ghi_wm2: np.ndarray
+    dni_wm2: np.ndarray
+    dhi_wm2: np.ndarray
+
+    def window(self, start: int, stop: int) -> Forcing:
+        """Steps ``start`` … ``stop − 1``."""
+        return Forcing(*(v[start:stop] for v in self))
+
+
+def local_wind_speed(u_met: np.ndarray, *, terrain: str, height_m: float) -> np.ndarray:
+    """Wind speed at façade height from the met-mast speed [m/s].
+
+    Notes
+    -----
+    V_z = U_met (δ_met/z_met)^a_met (z/δ)^a with the met station in flat open country
+    (a_met = 0.14, δ_met = 270 m, z_met = 10 m) and the site's terrain class (EnergyPlus
+    Engineering Reference, "Local Wind Speed Calculations"; physics §7.2).
+    """
+    a_met, d_met = TERRAIN_PROFILE["flat"]
+    a, d = TERRAIN_PROFILE[terrain]
+    return np.asarray(u_met, float) * (d_met / MET_HEIGHT_M) ** a_met * (height_m / d) ** a
+
+
+def facade_forcing(cfg: PanelConfig, w: WeatherInputs, *,
+                   transposition: str | None = None) -> Forcing:
+    """Façade boundary conditions of every step (physics §4, §6.1, §7.2, §8.2).
+
+    Parameters
+    ----------
+    cfg : PanelConfig
+    w : WeatherInputs
+    transposition : {"haydavies", "isotropic", "perez"}, optional
+        Defaults to ``cfg.model.transposition``.
+    """
+    site, fac = cfg.site, cfg.facade
+    sun = solar_position(w.time_s, site.latitude_deg, site.longitude_deg)
+    dni_extra = extraterrestrial_irradiance(w.time_s)
+    ghi = np.clip(np.asarray(w.ghi_wm2, float), 0.0, None)
+    split = erbs(ghi, sun.zenith_deg, dni_extra)
+    dni = np.where(np.isfinite(w.dni_wm2), w.dni_wm2, split.dni)
+    dhi = np.where(np.isfinite(w.dhi_wm2), w.dhi_wm2, split.dhi)
+    below = sun.zenith_deg >= 90.0  # no beam from a sun below the horizon
+    dni = np.where(below, 0.0, np.clip(dni, 0.0, None))
+    dhi = np.clip(dhi, 0.0, None)
+    fi = facade_irradiance(dni=dni, dhi=dhi, ghi=ghi, zenith_deg=sun.zenith_deg,
+                           azimuth_deg=sun.azimuth_deg, surface_azimuth_deg=fac.azimuth_deg,
+                           albedo=site.albedo, dni_extra=dni_extra,
+                           model=transposition or cfg.model.transposition)
+    if cfg.model.sky_model == "clark_allen":
+        dew = np.where(np.isfinite(w.t_dew_k), w.t_dew_k, w.t_out_k - 5.0)
+        t_sky = sky_temperature_clark_allen(w.t_out_k, dew, 0.0)
+    else:
+        t_sky = sky_temperature_swinbank(w.t_out_k)
+    geom = AirflowGeometry.from_panel(cfg)
+    cp_b, cp_t = geom.wind_pressure_coefficients(w.wind_dir_deg, fac.azimuth_deg)
+    return Forcing(
+        time_s=np.asarray(w.time_s, float),
+        t_out_k=np.asarray(w.t_out_k, float),
+        t_in_k=np.asarray(w.t_in_k, float),
+        t_mrt_k=np.asarray(w.t_mrt_k, float),
+        t_rad_out_k=exterior_radiant_temperature(w.t_out_k, t_sky),
+        p_atm_pa=np.asarray(w.pressure_pa, float),
+        wind_ms=local_wind_speed(w.wind_speed_ms, terrain=site.terrain,
+                                 height_m=site.facade_height_m),
+        cp_bottom=cp_b,
+        cp_top=cp_t,
+        zenith_deg=sun.zenith_deg,
+        azimuth_deg=sun.azimuth_deg,
+        aoi_deg=fi.aoi_deg,
+        profile_deg=fi.profile_deg,
+        beam_wm2=fi.beam,
+        diffuse_wm2=fi.sky_diffuse + fi.ground_diffuse,
+        ghi_wm2=ghi,
+        dni_wm2=dni,
+        dhi_wm2=dhi,
+    )
+
+
+class OpticalLoads(NamedTuple):
+    """What the louver angle changes, shape (..., n) for angles (...) and n steps.
+
+    Attributes
+    ----------
+    sources : (..., n, 4), [W/m2]
+        Absorbed short-wave in L1, L2, L3, louver (node order, errata E3).
+    lw_exchange : (..., n, 3), [-]
+        Cavity long-wave exchange factors R_14, R_12, R_42 (physics §6.2).
+    q_trans_wm2 : (..., n), [W/m2]
+        Solar short-wave transmitted into the room.
+    q_da_w : (..., n), [W]
+        Daylighting benefit Q_DA (physics §12.4).
+    """
+
+    sources: np.ndarray
+    lw_exchange: np.ndarray
+    q_trans_wm2: np.ndarray
+    q_da_w: np.ndarray
+
+
+class FacadeOptics:
+    """Short- and long-wave optics of one panel, evaluated for arrays of louver angles."""
+
+    def __init__(self, cfg: PanelConfig) -> None:
+        self.cfg = cfg
+        gl = cfg.glazing
+        self.glass_solar = glass_triples(gl, band="solar")
+        self.glass_visible = glass_triples(gl, band="visible")
+        if cfg.louver is None:
+            self.louver_solar = self.louver_visible = NO_LOUVER
+        else:
+            self.louver_solar = LouverOptics.from_config(cfg.louver, band="solar")
+            self.louver_visible = LouverOptics.from_config(cfg.louver, band="visible")
+        self.eps_1b = gl.exterior.emissivity_back
+        self.eps_2f = gl.interior_outer.emissivity_front
+        self.area = cfg.facade.width_m * cfg.facade.glazed_height_m
+        self.floor = cfg.facade.width_m * cfg.room.floor_depth_m
+
+    def lw_exchange(self, phi_rad: np.ndarray) -> np.ndarray:
+        """(R_14, R_12, R_42) for louver angles ``phi_rad`` [rad] → shape (..., 3)."""
+        ir = self.louver_solar.infrared(np.asarray(phi_rad, float))
+        r = cavity_exchange_matrix(self.eps_1b, ir.eps_L, ir.tau_L, self.eps_2f)
+        return np.stack([r[..., 0, 1], r[..., 0, 2], r[..., 1, 2]], axis=-1)
+
+    def loads(self, forcing: Forcing, phi_rad: np.ndarray | float) -> OpticalLoads:
+        """Loads for louver angles ``phi_rad`` [rad] (scalar or shape (m,)) over all steps.
+
+        Returns arrays of shape (n, ...) for a scalar angle and (m, n, ...) for m angles.
+        """
+        phi = np.asarray(phi_rad, float)
+        phi_b = phi[..., None]  # broadcast against the step axis
+        cos_aoi = np.cos(np.radians(forcing.aoi_deg))
+        profile = np.radians(forcing.profile_deg)
+        common = dict(beam=forcing.beam_wm2, diffuse=forcing.diffuse_wm2, cos_aoi=cos_aoi,
+                      phi=phi_b, profile=profile)
+        sol = layer_absorption(**common, glass=self.glass_solar, louver=self.louver_solar)
+        vis = layer_absorption(**common, glass=self.glass_visible, louver=self.louver_visible)
+        shape = np.broadcast_shapes(phi_b.shape, forcing.beam_wm2.shape)
+        sources = np.stack([np.broadcast_to(s, shape) for s in (sol.s1, sol.s2, sol.s3,
+                                                                  sol.s4)], axis=-1)
+        lw = np.broadcast_to(self.lw_exchange(phi)[..., None, :], (*shape, 3))
+        d = self.cfg.daylight
+        e_wp = d.luminous_efficacy_lmw * d.utilisation * self.area * vis.transmitted / self.floor
+        q_da = d.lighting_power_wm2 * self.floor * np.minimum(1.0, e_wp / d.illuminance_setpoint_lx)
+        return OpticalLoads(sources, lw, np.broadcast_to(sol.transmitted, shape),
+                            np.broadcast_to(q_da, shape))
+
+
+def step_inputs(forcing: Forcing, loads: OpticalLoads) -> StepInputs:
+    """Join the boundary and the optical loads into model inputs of shape (..., n)."""
+    return StepInputs(
+        t_out_k=forcing.t_out_k,
+        t_in_k=forcing.t_in_k,
+        t_mrt_k=forcing.t_mrt_k,
+        t_rad_out_k=forcing.t_rad_out_k,
+        p_atm_pa=forcing.p_atm_pa,
+        wind_ms=forcing.wind_ms,
+        cp_bottom=forcing.cp_bottom,
+        cp_top=forcing.cp_top,
+        sources=loads.sources,
+        lw_exchange=loads.lw_exchange,
+        q_trans_wm2=loads.q_trans_wm2,
+        q_da_w=loads.q_da_w,
+    )
+
+
+def celsius(t_k: np.ndarray) -> np.ndarray:
+    """Kelvin → degrees Celsius (for the boundary of the package)."""
+    return np.asarray(t_k) - T_ZERO

@@ -1,0 +1,284 @@
+"""The lumped double-skin façade model: ẋ = A(u,t)x + b(u,t) with exact ZOH (Eq. 1–2).
+
+:class:`LumpedModel` is the public face of the physics: one coupled step for a batch of
+states, a horizon rollout for a batch of control sequences (what the optimiser and the
+calibrator call thousands of times), and the steady state used as initial condition
+(errata E19.1). The step itself lives in :mod:`dsfd.physics.coupling`; the exogenous
+inputs (weather, sun, optics) are built by :mod:`dsfd.physics.forcing`.
+
+States are x1..x6 [K] (L1, L2, L3, louver, cavity air, DGU gap gas); parameters
+θ = (h_out, h_ca1, h_ca2, h_ca3, h_ca4, h_in, f, c, n) in the order of
+:data:`dsfd.config.panel.PARAMETER_NAMES`.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from dsfd.config.panel import PARAMETER_NAMES, PanelConfig
+from dsfd.physics.airflow import AirflowBoundary, AirflowGeometry
+from dsfd.physics.coupling import (
+    NO_LOUVER_CAPACITY,
+    NetworkConstants,
+    StepInputs,
+    StepResult,
+    coupled_step,
+    frozen_network,
+    with_flow,
+)
+from dsfd.physics.regimes import FlowSetup, flow_setup
+
+N_PARAMS = len(PARAMETER_NAMES)
+
+
+class Trajectory(NamedTuple):
+    """A batch of horizon rollouts: leading shape (B, H) unless noted.
+
+    Attributes
+    ----------
+    x : (B, H + 1, 6), [K]
+        States at the step boundaries, x[:, 0] = x0.
+    x_mean : (B, H, 6), [K]
+        Exact step averages.
+    m_dot : (B, H, 4), [kg/s]
+        Opening mass flows (EB, ET, IB, IT), positive into the cavity.
+    label : (B, H), int
+        Realised regime labels.
+    v_cav_ms : (B, H), [m/s]
+        Signed mean cavity velocity.
+    q_cv_rd_w, q_sol_w, q_air_w, q_da_w : (B, H), [W]
+        Step-average heat flows into the room.
+    heat_in_wm2 : (B, H), [W/m2]
+        Net heat into the network (energy balance).
+    evaluations : (B, H), int
+    """
+
+    x: np.ndarray
+    x_mean: np.ndarray
+    m_dot: np.ndarray
+    label: np.ndarray
+    v_cav_ms: np.ndarray
+    q_cv_rd_w: np.ndarray
+    q_sol_w: np.ndarray
+    q_air_w: np.ndarray
+    q_da_w: np.ndarray
+    heat_in_wm2: np.ndarray
+    evaluations: np.ndarray
+
+
+def network_constants(cfg: PanelConfig) -> NetworkConstants:
+    """Heat capacities, emissivities and coupling options of a panel (physics §2, §9)."""
+    gl = cfg.glazing
+    mo = cfg.model
+    rho_a, cp_a = mo.air_density_kgm3, mo.air_heat_capacity_jkgk
+
+    def pane(layer) -> float:
+        return layer.density_kgm3 * layer.heat_capacity_jkgk * layer.thickness_m
+
+    lv = cfg.louver
+    if lv is not None:
+        ratio = lv.slat_width_m / lv.slat_pitch_m
+        c4 = lv.density_kgm3 * lv.heat_capacity_jkgk * lv.slat_thickness_m * ratio
+        a_l = 2.0 * ratio
+    else:
+        c4, a_l = NO_LOUVER_CAPACITY, 0.0
+    capacity = np.array([
+        pane(gl.exterior),
+        pane(gl.interior_outer),
+        pane(gl.interior_inner),
+        c4,
+        rho_a * cp_a * cfg.facade.cavity_depth_m,
+        rho_a * cp_a * gl.interior_gap_m,
+    ])
+    return NetworkConstants(
+        capacity=capacity,
+        slat_area_ratio=a_l,
+        has_louver=lv is not None,
+        eps_l1_front=gl.exterior.emissivity_front,
+        eps_l3_back=gl.interior_inner.emissivity_back,
+        h_r23_factor=1.0 / (1.0 / gl.interior_outer.emissivity_back
+                            + 1.0 / gl.interior_inner.emissivity_front - 1.0),
+        geom=AirflowGeometry.from_panel(cfg),
+        dt=mo.step_s,
+        cp_air=cp_a,
+        coupling=mo.coupling,
+        substeps=mo.ping_pong_substeps,
+        tol_k=mo.coupling_tolerance_k,
+        max_evals=mo.coupling_max_iterations,
+        zoh=mo.zoh,
+        q_air_basis=mo.q_air_basis,
+    )
+
+
+class LumpedModel:
+    """Lumped 6-state façade model of one panel (batched; pure, no I/O).
+
+    Parameters
+    ----------
+    cfg : PanelConfig
+        Panel description; model options come from ``cfg.model``.
+    """
+
+    def __init__(self, cfg: PanelConfig) -> None:
+        self.cfg = cfg
+        self.nc = network_constants(cfg)
+        self.geom = self.nc.geom
+        self.dt = self.nc.dt
+        self.area = self.geom.facade_area_m2
+
+    @property
+    def capacity(self) -> np.ndarray:
+        """Node heat capacities per m² façade [J/(m2 K)]."""
+        return self.nc.capacity
+
+    def default_theta(self) -> np.ndarray:
+        """Parameter defaults θ in the order of :data:`PARAMETER_NAMES`."""
+        p = self.cfg.parameters
+        return np.array([getattr(p, name).default for name in PARAMETER_NAMES])
+
+    def theta_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper calibration bounds of θ."""
+        p = self.cfg.parameters
+        return (np.array([getattr(p, k).lower for k in PARAMETER_NAMES]),
+                np.array([getattr(p, k).upper for k in PARAMETER_NAMES]))
+
+    # ------------------------------------------------------------------ preparation
+    def _flow_setup(self, regime: np.ndarray, or_: np.ndarray, inp: StepInputs,
+                    theta: np.ndarray) -> FlowSetup:
+        shape = regime.shape
+        air = AirflowBoundary(inp.t_out_k, inp.t_in_k, inp.p_atm_pa, inp.wind_ms,
+                              inp.cp_bottom, inp.cp_top)
+        setup = flow_setup(regime.ravel(), or_.ravel(),
+                           AirflowBoundary(*(np.ravel(v) for v in air)), self.geom,
+                           f=theta[..., 6].ravel(), c=theta[..., 7].ravel(),
+                           n=theta[..., 8].ravel())
+        return setup.reshape(shape)
+
+    def _batch(self, shape: tuple[int, ...], regime, or_, inputs: StepInputs, theta):
+        regime = np.broadcast_to(np.asarray(regime, int), shape)
+        or_ = np.broadcast_to(np.asarray(or_, float), shape)
+        theta = np.broadcast_to(np.asarray(theta, float), (*shape, N_PARAMS))
+        inp = inputs.broadcast(shape)
+        return regime, or_, inp, theta
+
+    # ------------------------------------------------------------------ public API
+    def step(self, x: np.ndarray, regime: np.ndarray, or_: np.ndarray, inputs: StepInputs,
+             theta: np.ndarray) -> StepResult:
+        """Advance a batch of states by one step.
+
+        Parameters
+        ----------
+        x : array (B, 6), [K]
+            States x1..x6 at the start of the step.
+        regime : int array (B,) or scalar
+            Commanded airflow regime 1..10.
+        or_ : array (B,) or scalar, [-]
+            Damper opening ratio 0..1.
+        inputs : StepInputs
+            Exogenous inputs (the louver angle enters through ``sources``/``lw_exchange``).
+        theta : array (9,) or (B, 9)
+            Parameters (h_out, h_ca1..h_ca4, h_in [W/(m2 K)], f [-], c [m3/(s Pa^n)], n [-]).
+
+        Returns
+        -------
+        StepResult
+        """
+        x = np.atleast_2d(np.asarray(x, float))
+        regime, or_, inp, theta = self._batch((x.shape[0],), regime, or_, inputs, theta)
+        setup = self._flow_setup(regime, or_, inp, theta)
+        return coupled_step(self.nc, x, inp, theta, setup)
+
+    def rollout(self, x0: np.ndarray, regime: np.ndarray, or_: np.ndarray,
+                inputs: StepInputs, theta: np.ndarray) -> Trajectory:
+        """Roll a batch of control sequences out over a horizon.
+
+        Parameters
+        ----------
+        x0 : array (B, 6) or (6,), [K]
+            Initial states.
+        regime, or_ : arrays broadcastable to (B, H)
+            Commanded regime and opening ratio per step.
+        inputs : StepInputs
+            Fields broadcastable to (B, H) (typically (H,) weather with (B, H) optics).
+        theta : array broadcastable to (B, H, 9)
+
+        Returns
+        -------
+        Trajectory
+        """
+        x = np.atleast_2d(np.asarray(x0, float))
+        regime = np.asarray(regime, int)
+        horizon = regime.shape[-1] if regime.ndim else 1
+        nb = max(x.shape[0], regime.shape[0] if regime.ndim == 2 else 1)
+        shape = (nb, horizon)
+        regime, or_, inp, theta = self._batch(shape, regime, or_, inputs, theta)
+        setup = self._flow_setup(regime, or_, inp, theta)
+        x = np.array(np.broadcast_to(x, (nb, 6)))
+        xs = np.empty((nb, horizon + 1, 6))
+        xs[:, 0] = x
+        cols = []
+        guess = None
+        for k in range(horizon):
+            res = coupled_step(self.nc, x, inp.at((slice(None), k)), theta[:, k],
+                               setup.at((slice(None), k)), guess)
+            cols.append(res)
+            # Warm start: under unchanged controls the cavity air changes by about as much
+            # as in the last step; after a control change start from the state.
+            if k + 1 < horizon:
+                same = (regime[:, k + 1] == regime[:, k]) & (or_[:, k + 1] == or_[:, k])
+                guess = np.where(same, 2.0 * res.x_next[:, 4] - x[:, 4], res.x_next[:, 4])
+            x = res.x_next
+            xs[:, k + 1] = x
+
+        def stack(get) -> np.ndarray:
+            return np.stack([get(r) for r in cols], axis=1)
+
+        return Trajectory(
+            x=xs,
+            x_mean=stack(lambda r: r.x_mean),
+            m_dot=stack(lambda r: r.flow.m_dot),
+            label=stack(lambda r: r.flow.label),
+            v_cav_ms=stack(lambda r: r.v_cav_ms),
+            q_cv_rd_w=stack(lambda r: r.q_cv_rd_w),
+            q_sol_w=stack(lambda r: r.q_sol_w),
+            q_air_w=stack(lambda r: r.q_air_w),
+            q_da_w=stack(lambda r: np.broadcast_to(r.q_da_w, (nb,))),
+            heat_in_wm2=stack(lambda r: r.heat_in_wm2),
+            evaluations=stack(lambda r: r.evaluations),
+        )
+
+    def steady_state(self, regime: np.ndarray, or_: np.ndarray, inputs: StepInputs,
+                     theta: np.ndarray, *, iterations: int = 60, tol_k: float = 1e-4,
+                     x_guess: np.ndarray | None = None) -> np.ndarray:
+        """Steady state x* = −L⁻¹q for constant inputs (errata E19.1 initial condition).
+
+        Iterates the linearised conductances and the airflow at the cavity temperature,
+        under-relaxed, until the state moves by less than ``tol_k`` [K].
+
+        Returns
+        -------
+        x : ndarray (B, 6), [K]
+        """
+        regime = np.atleast_1d(np.asarray(regime, int))
+        nb = regime.shape[0]
+        regime, or_, inp, theta = self._batch((nb,), regime, or_, inputs, theta)
+        setup = self._flow_setup(regime, or_, inp, theta)
+        if x_guess is None:
+            t_mid = 0.5 * (inp.t_out_k + inp.t_in_k)
+            x = np.repeat(t_mid[:, None], 6, axis=1)
+        else:
+            x = np.array(np.broadcast_to(x_guess, (nb, 6)), float)
+        for _ in range(iterations):
+            lap0, q0, _ = frozen_network(self.nc, x, inp, theta)
+            lap, q, *_ = with_flow(self.nc, x[:, 4], setup, lap0, q0)
+            x_star = -np.linalg.solve(lap, q[..., None])[..., 0]
+            new = 0.5 * x + 0.5 * x_star
+            if np.max(np.abs(new - x)) < tol_k:
+                return new
+            x = new
+        return x
+
+
+__all__ = ["LumpedModel", "StepInputs", "StepResult", "Trajectory", "network_constants"]

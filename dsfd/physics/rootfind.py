@@ -1,0 +1,138 @@
+"""Vectorised scalar fixed-point solver for the thermal–airflow coupling (physics §11, E9).
+
+Solves T = Φ(T) independently for every element of a batch, i.e. finds a root of
+h(T) = Φ(T) − T. Φ is bounded (flows are bounded), so h → +∞ as T → −∞ and h → −∞ as
+T → +∞ and a sign change always exists.
+
+Method: the first step is the plain iteration T₁ = Φ(T₀) (Φ depends weakly on T, so this
+is already close), then secant steps. Before the root is bracketed a step must move in
+the direction of the sign of h and is limited to ``max_step``; once a sign change is
+seen, the secant step is accepted only if it falls between the latest point and the
+bracket midpoint, otherwise the bracket is bisected (Dekker's method). The latest
+iterate is always the returned one, so callers can keep per-evaluation side results.
+Uniqueness of the root is not guaranteed (errata E9); the one bracketed is returned.
+
+Reference: T. J. Dekker, "Finding a zero by means of successive linear interpolation",
+in Constructive Aspects of the Fundamental Theorem of Algebra, Wiley (1969) 37–48.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import NamedTuple
+
+import numpy as np
+
+
+class FixedPoint(NamedTuple):
+    """Result per batch element."""
+
+    t: np.ndarray
+    evaluations: np.ndarray
+    converged: np.ndarray
+
+
+def solve_fixed_point(
+    phi: Callable[[np.ndarray, np.ndarray], np.ndarray],
+    t0: np.ndarray,
+    *,
+    tol: float,
+    max_evals: int,
+    max_step: float = 50.0,
+) -> FixedPoint:
+    """Solve ``t = phi(t)`` elementwise.
+
+    Parameters
+    ----------
+    phi : callable
+        ``phi(t, rows) -> values`` evaluates Φ for batch elements ``rows`` (int array) at
+        points ``t``. The last call for each element is at its returned point.
+    t0 : array (B,)
+        Starting guesses.
+    tol : float
+        Convergence when |Φ(t) − t| ≤ tol or the bracket is narrower than tol.
+    max_evals : int
+        Evaluation limit per element (≥ 2).
+    max_step : float
+        Largest single move before the root is bracketed.
+
+    Returns
+    -------
+    FixedPoint
+    """
+    b = np.array(t0, dtype=float).ravel()
+    nb = b.size
+    if nb == 1:
+        return _solve_one(phi, float(b[0]), tol=tol, max_evals=max_evals, max_step=max_step)
+    rows = np.arange(nb)
+    fb = phi(b, rows) - b
+    evals = np.ones(nb, dtype=int)
+    c = np.full(nb, np.nan)
+    fc = np.full(nb, np.nan)
+    a = np.full(nb, np.nan)
+    done = np.abs(fb) <= tol
+    while True:
+        rows = np.flatnonzero(~done)
+        if rows.size == 0:
+            break
+        br, fbr, cr, fcr, ar = b[rows], fb[rows], c[rows], fc[rows], a[rows]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            sec = br - fbr * (br - cr) / (fbr - fcr)
+        sec = np.where(np.isfinite(sec), sec, br + fbr)
+        bracketed = np.isfinite(ar)
+        # Before bracketing: move towards the sign of h, at most max_step.
+        search = np.where((sec - br) * fbr > 0, sec, br + fbr)
+        search = br + np.clip(search - br, -max_step, max_step)
+        # Inside a bracket: secant if between b and the midpoint, else bisect.
+        mid = 0.5 * (ar + br)
+        between = (sec - br) * (sec - mid) < 0
+        t_new = np.where(bracketed, np.where(between, sec, mid), search)
+        f_new = phi(t_new, rows) - t_new
+        evals[rows] += 1
+        # The contrapoint keeps the sign opposite to the newest point.
+        flip = np.sign(f_new) != np.sign(fbr)
+        new_a = np.where(flip, br, ar)
+        a[rows] = new_a
+        c[rows], fc[rows] = br, fbr
+        b[rows], fb[rows] = t_new, f_new
+        width = np.abs(new_a - t_new)
+        done[rows] = (
+            (np.abs(f_new) <= tol)
+            | (np.isfinite(width) & (width <= tol))
+            | (evals[rows] >= max_evals)
+        )
+    converged = (np.abs(fb) <= tol) | (np.abs(a - b) <= tol)
+    return FixedPoint(t=b, evaluations=evals, converged=converged)
+
+
+def _solve_one(phi: Callable[[np.ndarray, np.ndarray], np.ndarray], b: float, *, tol: float,
+               max_evals: int, max_step: float) -> FixedPoint:
+    """The same iteration for a single element, on Python floats (no array overhead)."""
+    row = np.zeros(1, dtype=int)
+
+    def h(t: float) -> float:
+        return float(phi(np.array([t]), row)[0]) - t
+
+    fb = h(b)
+    evals = 1
+    c = fc = a = math.nan
+    while abs(fb) > tol and evals < max_evals:
+        sec = b - fb * (b - c) / (fb - fc) if fb != fc and math.isfinite(c) else b + fb
+        if not math.isfinite(sec):
+            sec = b + fb
+        if math.isfinite(a):
+            mid = 0.5 * (a + b)
+            t_new = sec if (sec - b) * (sec - mid) < 0 else mid
+        else:
+            step = sec - b if (sec - b) * fb > 0 else fb
+            t_new = b + max(-max_step, min(max_step, step))
+        f_new = h(t_new)
+        evals += 1
+        if (f_new > 0) != (fb > 0):
+            a = b
+        c, fc, b, fb = b, fb, t_new, f_new
+        if math.isfinite(a) and abs(a - b) <= tol:
+            break
+    ok = abs(fb) <= tol or (math.isfinite(a) and abs(a - b) <= tol)
+    return FixedPoint(t=np.array([b]), evaluations=np.array([evals]), converged=np.array([ok]))

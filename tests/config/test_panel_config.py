@@ -1,0 +1,120 @@
+"""Panel configuration: shipped files load; bad files name the key path and value."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+from dsfd.config import ConfigError, load_panel, panel_from_mapping
+from tests.conftest import PANELS
+
+SHIPPED = sorted(PANELS.glob("*.yaml"))
+
+
+@pytest.mark.parametrize("path", SHIPPED, ids=lambda p: p.name)
+def test_shipped_panels_are_valid(path):
+    cfg = load_panel(path)
+    assert cfg.panel.id == path.stem
+
+
+def test_suwon_panel_holds_the_paper_unit(suwon):
+    assert suwon.facade.azimuth_deg == 180.0
+    assert suwon.facade.cavity_depth_m == 0.25
+    assert suwon.louver.slat_width_m == 0.05
+    assert suwon.louver.angles_deg() == tuple(float(a) for a in range(-90, 91, 18))
+    assert suwon.openings.available_regimes() == tuple(range(1, 11))
+    assert suwon.parameters.f.upper == 1e4  # errata E11
+
+
+def test_panel_without_louver_is_expressible():
+    cfg = load_panel(PANELS / "suwon-south-no-louver.yaml")
+    assert cfg.louver is None
+
+
+def _suwon_dict() -> dict:
+    return yaml.safe_load((PANELS / "suwon-south.yaml").read_text())
+
+
+def _issues(data: dict) -> dict[str, str]:
+    with pytest.raises(ConfigError) as exc:
+        panel_from_mapping(data, source="test.yaml")
+    return {issue.path: str(issue) for issue in exc.value.issues}
+
+
+def test_errors_name_every_key_path_and_value():
+    d = _suwon_dict()
+    d["facade"]["cavity_dept_m"] = d["facade"].pop("cavity_depth_m")  # misspelt
+    d["louver"]["slat_width_m"] = "five cm"  # string where a number belongs
+    d["glazing"]["interior_gap_m"] = -0.012  # negative
+    d["site"]["terrain"] = "forest"
+    issues = _issues(d)
+    assert "facade.cavity_dept_m" in issues and "did you mean 'cavity_depth_m'" in issues[
+        "facade.cavity_dept_m"]
+    assert "facade.cavity_depth_m" in issues and "missing" in issues["facade.cavity_depth_m"]
+    assert "'five cm'" in issues["louver.slat_width_m"]
+    assert "-0.012" in issues["glazing.interior_gap_m"]
+    assert "'forest'" in issues["site.terrain"]
+
+
+def test_negative_cavity_depth_and_inconsistent_geometry():
+    d = _suwon_dict()
+    d["facade"]["cavity_depth_m"] = -0.25
+    assert "facade.cavity_depth_m" in _issues(d)
+    d["facade"]["cavity_depth_m"] = 0.04  # slat (5 cm) wider than the cavity
+    issues = _issues(d)
+    assert "louver.slat_width_m" in issues and "wider than the cavity" in issues[
+        "louver.slat_width_m"]
+
+
+def test_cross_field_checks():
+    d = _suwon_dict()
+    d["parameters"]["h_in"] = {"default": 9.0, "lower": 1.0, "upper": 8.0}
+    d["glazing"]["exterior"]["solar_reflectance_front"] = 0.5  # τ 0.6 + ρ 0.5 > 1
+    d["louver"]["step_deg"] = 17.0
+    issues = _issues(d)
+    assert "parameters.h_in.default" in issues
+    assert "glazing.exterior.solar_reflectance_front" in issues
+    assert "louver.step_deg" in issues
+
+
+def test_booleans_are_not_numbers_and_ints_are_not_strings():
+    d = _suwon_dict()
+    d["model"]["step_s"] = True
+    d["panel"]["id"] = 7
+    issues = _issues(d)
+    assert "model.step_s" in issues and "panel.id" in issues
+
+
+def test_duplicate_keys_and_bad_yaml_are_errors(tmp_path: Path):
+    text = (PANELS / "suwon-south.yaml").read_text()
+    dup = tmp_path / "dup.yaml"
+    dup.write_text(text.replace("facade:\n", "facade:\n  width_m: 3.0\n", 1))
+    with pytest.raises(ConfigError, match="duplicate key 'width_m'"):
+        load_panel(dup)
+    broken = tmp_path / "broken.yaml"
+    broken.write_text("panel: {id: x\n")
+    with pytest.raises(ConfigError, match="invalid YAML"):
+        load_panel(broken)
+
+
+def test_check_config_cli(tmp_path: Path):
+    bad = tmp_path / "bad.yaml"
+    d = _suwon_dict()
+    d["facade"]["cavity_dept_m"] = d["facade"].pop("cavity_depth_m")
+    d["louver"]["slat_width_m"] = "wide"
+    d["glazing"]["interior_gap_m"] = -1
+    bad.write_text(yaml.safe_dump(d))
+    ok = subprocess.run([sys.executable, "-m", "dsfd", "check-config", *map(str, SHIPPED)],
+                        capture_output=True, text=True)
+    assert ok.returncode == 0
+    assert all(f"OK {p}" in ok.stdout for p in SHIPPED)
+    res = subprocess.run([sys.executable, "-m", "dsfd", "check-config", str(SHIPPED[0]),
+                          str(bad)], capture_output=True, text=True)
+    assert res.returncode == 2
+    for key in ("facade.cavity_dept_m", "louver.slat_width_m", "glazing.interior_gap_m"):
+        assert key in res.stderr
+    assert f"OK {SHIPPED[0]}" in res.stdout

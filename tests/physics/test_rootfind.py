@@ -1,0 +1,70 @@
+"""The vectorised coupling fixed-point solver (physics §11, errata E9)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from dsfd.physics.rootfind import solve_fixed_point
+
+
+def _phi_factory(fn):
+    calls = []
+
+    def phi(t, rows):
+        calls.append((t.copy(), rows.copy()))
+        return fn(t, rows)
+
+    return phi, calls
+
+
+@pytest.mark.parametrize("batch", [1, 7])
+def test_contraction_and_chattering_maps_converge(batch):
+    """Φ with slope −3 (plain iteration diverges, the chattering case) still converges."""
+    roots = np.linspace(280, 320, batch)
+    slopes = np.linspace(-3.0, 0.8, batch) if batch > 1 else np.array([-3.0])
+
+    def fn(t, rows):
+        return roots[rows] + slopes[rows] * (t - roots[rows]) + 0.01 * (t - roots[rows]) ** 2
+
+    phi, calls = _phi_factory(fn)
+    fp = solve_fixed_point(phi, roots + 7.0, tol=1e-9, max_evals=40)
+    assert fp.converged.all()
+    np.testing.assert_allclose(fp.t, roots, atol=1e-7)
+    # The last evaluation of each element is at its returned point.
+    last = {}
+    for t, rows in calls:
+        for ti, r in zip(t, rows, strict=True):
+            last[int(r)] = ti
+    np.testing.assert_allclose([last[i] for i in range(batch)], fp.t, atol=0)
+
+
+def test_far_start_and_saturating_map():
+    """Bounded Φ (like bounded flows): bracketing from 60 K away with a step limit."""
+
+    def fn(t, rows):
+        return 300.0 + 20.0 * np.tanh((t - 300.0) / 5.0) * -1.0
+
+    phi, _ = _phi_factory(fn)
+    fp = solve_fixed_point(phi, np.array([360.0, 240.0, 300.5]), tol=1e-8, max_evals=60)
+    assert fp.converged.all()
+    np.testing.assert_allclose(fp.t, 300.0, atol=1e-6)
+
+
+def test_scalar_and_vector_paths_agree():
+    def fn(t, rows):
+        return 290.0 + 0.3 * np.sin(t / 3.0)
+
+    one = solve_fixed_point(_phi_factory(fn)[0], np.array([280.0]), tol=1e-10, max_evals=50)
+    many = solve_fixed_point(_phi_factory(fn)[0], np.array([280.0, 280.0]), tol=1e-10,
+                             max_evals=50)
+    np.testing.assert_allclose(one.t[0], many.t, atol=1e-9)
+
+
+def test_evaluation_limit_is_respected():
+    def fn(t, rows):
+        return 300.0 - 50.0 * (t - 300.0)  # steep: needs many bisections at tol 1e-15
+
+    fp = solve_fixed_point(_phi_factory(fn)[0], np.array([310.0, 290.0]), tol=1e-15,
+                           max_evals=5)
+    assert np.all(fp.evaluations <= 5)
