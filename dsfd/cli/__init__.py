@@ -14,7 +14,7 @@ from collections.abc import Sequence
 from dsfd import __version__
 
 #: Command modules, in the order they appear in ``dsfd --help``.
-COMMANDS = ("check_config",)
+COMMANDS = ("check_config", "simulate")
 
 EXIT_OK = 0
 EXIT_FAILURE = 1

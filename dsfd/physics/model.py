@@ -29,6 +29,7 @@ from dsfd.physics.coupling import (
     with_flow,
 )
 from dsfd.physics.regimes import FlowSetup, flow_setup
+from dsfd.physics.rootfind import solve_fixed_point
 
 N_PARAMS = len(PARAMETER_NAMES)
 
@@ -250,12 +251,15 @@ class LumpedModel:
         )
 
     def steady_state(self, regime: np.ndarray, or_: np.ndarray, inputs: StepInputs,
-                     theta: np.ndarray, *, iterations: int = 60, tol_k: float = 1e-4,
+                     theta: np.ndarray, *, iterations: int = 50, tol_k: float = 1e-5,
                      x_guess: np.ndarray | None = None) -> np.ndarray:
         """Steady state x* = −L⁻¹q for constant inputs (errata E19.1 initial condition).
 
-        Iterates the linearised conductances and the airflow at the cavity temperature,
-        under-relaxed, until the state moves by less than ``tol_k`` [K].
+        Outer iterations refresh the linearised radiative conductances at the current
+        state; inside each, the cavity temperature that sets the airflow is solved as the
+        fixed point T = x*_5(ṁ(T)) with the same solver as the step coupling (a plain
+        iteration would chatter in the diagonal regimes). Stops when the state moves by
+        less than ``tol_k`` [K].
 
         Returns
         -------
@@ -272,12 +276,19 @@ class LumpedModel:
             x = np.array(np.broadcast_to(x_guess, (nb, 6)), float)
         for _ in range(iterations):
             lap0, q0, _ = frozen_network(self.nc, x, inp, theta)
-            lap, q, *_ = with_flow(self.nc, x[:, 4], setup, lap0, q0)
-            x_star = -np.linalg.solve(lap, q[..., None])[..., 0]
-            new = 0.5 * x + 0.5 * x_star
-            if np.max(np.abs(new - x)) < tol_k:
-                return new
-            x = new
+            x_new = np.empty_like(x)
+
+            def phi(t5: np.ndarray, rows: np.ndarray, lap0=lap0, q0=q0, x_new=x_new):
+                sub = setup if rows.size == nb else setup.take(rows)
+                lap, q, *_ = with_flow(self.nc, t5, sub, lap0[rows], q0[rows])
+                x_new[rows] = -np.linalg.solve(lap, q[..., None])[..., 0]
+                return x_new[rows, 4]
+
+            solve_fixed_point(phi, x[:, 4], tol=tol_k * 0.1, max_evals=60)
+            moved = np.max(np.abs(x_new - x))
+            x = x_new
+            if moved < tol_k:
+                break
         return x
 
 
