@@ -11,6 +11,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
+from dsfd.config.control import Control
+from dsfd.config.devices import Devices
 from dsfd.config.loader import Problem, setting
 
 PARAMETER_NAMES: tuple[str, ...] = (
@@ -332,6 +334,11 @@ class PanelConfig:
     daylight: Daylight = setting(default_factory=Daylight, doc="Daylighting proxy")
     model: ModelOptions = setting(default_factory=ModelOptions, doc="Lumped-model options")
     parameters: Parameters = setting(doc="Calibrated parameters: defaults and bounds")
+    control: Control = setting(default_factory=Control, doc="Optimal control and baseline")
+    devices: Devices | None = setting(
+        None, doc="Modbus devices and the weather station the daemon reads and commands; "
+        "null for simulation-only panels (dsfd.config.devices)"
+    )
 
     def check(self) -> list[Problem]:
         out = []

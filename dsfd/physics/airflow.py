@@ -12,6 +12,7 @@ outlet at cavity density), E10 (IBPSA regularisation), E12 (reported velocity), 
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -206,6 +207,16 @@ def regularised_power(dp: np.ndarray, coef: np.ndarray, m: np.ndarray | float,
 
 def _poly_coefficients(m: np.ndarray) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
     """IBPSA coefficients a, b, c, d of the regularising polynomial for exponent m (E10)."""
+    if m.ndim == 0:
+        return _poly_coefficients_scalar(float(m))
+    b = m * m / 8 - 3 * _GAMMA - 1.5 * m + 35 / 8
+    c = -m * m / 4 + 3 * _GAMMA + 2.5 * m - 21 / 4
+    d = m * m / 8 - _GAMMA - m + 15 / 8
+    return _GAMMA, b, c, d
+
+
+@functools.lru_cache(maxsize=32)
+def _poly_coefficients_scalar(m: float) -> tuple[float, float, float, float]:
     b = m * m / 8 - 3 * _GAMMA - 1.5 * m + 35 / 8
     c = -m * m / 4 + 3 * _GAMMA + 2.5 * m - 21 / 4
     d = m * m / 8 - _GAMMA - m + 15 / 8
@@ -332,17 +343,22 @@ def one_node_flows(
     hi = np.nanmax(big, axis=1) + 1.0
     lo = np.where(np.isfinite(lo), lo, 0.0)
     hi = np.where(np.isfinite(hi), hi, 0.0)
+    # Flow coefficients for inflow (boundary air) and outflow (cavity air) of each opening.
+    c_in = np.sqrt(2.0 * rho_b * inv_k)
+    c_out = np.sqrt(2.0 * rho_c[:, None] * inv_k)
 
     def total(pc: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Σṁ and dΣṁ/dP_c at cavity pressure ``pc`` for batch ``rows``."""
         dp = head[rows] - pc[:, None]
-        rho_up = np.where(dp > 0, rho_b[rows], rho_c[rows, None])
-        coef = np.sqrt(2.0 * rho_up * inv_k[rows])
+        coef = np.where(dp > 0, c_in[rows], c_out[rows])
         m = regularised_power(dp, coef, 0.5, dp_t)
         slope = _regularised_power_slope(dp, coef, 0.5, dp_t)  # dṁ/dΔp ≥ 0
         return m.sum(axis=1), -slope.sum(axis=1)
 
-    pc = 0.5 * (lo + hi)
+    # Start from the conductance-weighted mean head (exact for linear openings).
+    w = np.sqrt(inv_k)
+    pc = np.where(w.sum(axis=1) > 0, (np.where(open_, head, 0.0) * w).sum(axis=1)
+                  / np.maximum(w.sum(axis=1), 1e-300), 0.5 * (lo + hi))
     rows = np.arange(len(pc))
     for _ in range(max_iter):
         if rows.size == 0:
@@ -359,6 +375,5 @@ def one_node_flows(
         pc[rows] = np.where(done, pc[rows], nxt)
         rows = rows[~done]
     dp = head - pc[:, None]
-    rho_up = np.where(dp > 0, rho_b, rho_c[:, None])
-    m_dot = regularised_power(dp, np.sqrt(2.0 * rho_up * inv_k), 0.5, dp_t)
+    m_dot = regularised_power(dp, np.where(dp > 0, c_in, c_out), 0.5, dp_t)
     return m_dot, pc
