@@ -1,0 +1,78 @@
+"""Settings of the optimal controller and its rule-based baseline (issue: optimal control).
+
+Objective and horizon follow the paper (Eq. 4–6, 15 one-minute steps); the search and
+the baseline thresholds are engineering choices, each documented here.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from itertools import pairwise
+from typing import Literal
+
+from dsfd.config.loader import Problem, setting
+
+
+@dataclass(frozen=True, kw_only=True)
+class Baseline:
+    """Rule-based controller: the comparison and the fallback (physics-free rules)."""
+
+    sun_threshold_wm2: float = setting(
+        20.0, doc="Façade beam irradiance above which the louver tracks the sun",
+        unit="W/m2", ge=0)
+    night_angle_deg: float = setting(
+        90.0, doc="Louver angle with no sun (closed; the paper's night position)", unit="deg",
+        ge=-90, le=90)
+    heating_open_above_room_k: float = setting(
+        2.0, doc="Heating: inside circulation when the cavity is this much warmer than the room",
+        unit="K", ge=0, le=30)
+    hysteresis_k: float = setting(
+        1.0, doc="Hysteresis of the temperature thresholds", unit="K", ge=0, le=10)
+    cooling_flush_above_outdoor_k: float = setting(
+        1.0, doc="Cooling: outside circulation when the cavity is this much warmer than outdoors",
+        unit="K", ge=0, le=30)
+    night_cooling_below_room_k: float = setting(
+        3.0, doc="Cooling: supply outdoor air through the cavity when outdoors is this much "
+        "cooler than the room (night flush)", unit="K", ge=0, le=30)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Control:
+    """Model-predictive control of louver angle, airflow regime and damper opening."""
+
+    mode: Literal["heating", "cooling", "auto"] = setting(
+        "auto", doc="Season: fixed, or auto by outdoor temperature (physics §12.5)")
+    auto_heating_below_c: float = setting(
+        15.0, doc="Auto mode: heating while the outdoor air is below this", unit="degC",
+        ge=-20, le=35)
+    horizon_steps: int = setting(15, doc="Prediction horizon in model steps (paper: 15 min)",
+                                 ge=1, le=240)
+    optimiser: Literal["mpc", "paper-sqp", "rule"] = setting(
+        "mpc", doc="mpc: exact over the louver grid and regimes with a bounded OR search; "
+        "paper-sqp: the paper's relaxation (AFR*, SLSQP, louver rounded); rule: baseline only")
+    or_grid_pct: tuple[float, ...] = setting(
+        (0.0, 50.0, 100.0), doc="Coarse damper openings evaluated for every louver/regime pair",
+        unit="%", ge=0, le=100)
+    or_refine_rounds: int = setting(
+        2, doc="Rounds of damper-opening refinement around the best point so far", ge=0, le=10)
+    or_refine_points: int = setting(
+        8, doc="Openings evaluated per refinement round (inside the current bracket)", ge=2,
+        le=50)
+    refine_margin_pct: float = setting(
+        2.0, doc="Refine every louver/regime pair whose coarse cost is within this margin of the "
+        "best (relative to the horizon's heat-flow scale)", unit="%", ge=0, le=100)
+    refine_max_pairs: int = setting(
+        4, doc="At most this many louver/regime pairs are refined (the best coarse ones)",
+        ge=1, le=200)
+    louver_move_penalty_wh: float = setting(
+        0.0, doc="Cost added per 18° louver step moved (motor wear)", unit="Wh", ge=0)
+    time_budget_s: float = setting(
+        20.0, doc="A decision taking longer than this falls back to the baseline", unit="s",
+        gt=0, le=60)
+    baseline: Baseline = setting(default_factory=Baseline, doc="Rule-based baseline")
+
+    def check(self) -> list[Problem]:
+        grid = self.or_grid_pct
+        if len(grid) < 2 or any(b <= a for a, b in pairwise(grid)):
+            return [Problem("or_grid_pct", grid, "need at least two strictly ascending values")]
+        return []
