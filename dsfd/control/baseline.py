@@ -1,0 +1,106 @@
+"""Rule-based control: the comparison for the optimiser and its fallback.
+
+Rules of the kind double-skin façades use today (CIBSE, *Natural ventilation in
+non-domestic buildings*, AM10, 1996, as cited by the paper; OBC-style hysteresis):
+
+* louver — in sun (façade beam above a threshold) it tracks the solar profile angle:
+  parallel to the rays to admit the sun when heating, perpendicular to block it when
+  cooling; with no sun it closes (the paper's night position, 90°);
+* airflow regime — heating: inside circulation (1) while the cavity is warmer than the
+  room by a margin, otherwise closed (10); cooling: outside circulation (3) while the
+  cavity is warmer than outdoors, night flushing with outdoor air (7) when outdoors is
+  much cooler than the room, otherwise closed; all thresholds with hysteresis;
+* dampers fully open in an open regime, shut when closed.
+
+Every choice is snapped to the actuator grid (18° louver steps) and to the regimes the
+panel's dampers allow, and the decision carries a trace saying which rule fired.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from dsfd.config.panel import PanelConfig
+from dsfd.control.optimiser import Decision
+
+INSIDE_CIRCULATION, OUTSIDE_CIRCULATION, NIGHT_FLUSH, CLOSED = 1, 3, 7, 10
+
+
+def quantise_louver(phi_deg: float, cfg: PanelConfig) -> float:
+    """Nearest louver position the motor can reach [deg] (0 without a louver)."""
+    if cfg.louver is None or not math.isfinite(phi_deg):
+        return 0.0
+    angles = np.asarray(cfg.louver.angles_deg())
+    return float(angles[np.argmin(np.abs(angles - np.clip(phi_deg, -90.0, 90.0)))])
+
+
+def rule_decision(cfg: PanelConfig, *, heating: bool, t5_c: float | None, t_in_c: float,
+                  t_out_c: float, beam_wm2: float, profile_deg: float,
+                  previous_afr: int | None = None) -> Decision:
+    """Baseline decision from the current measurements (°C, W/m2, deg at this boundary).
+
+    Parameters
+    ----------
+    heating : bool
+        Season of the objective.
+    t5_c : float or None, [degC]
+        Cavity air temperature; ``None`` when the sensor is not usable (then closed).
+    t_in_c, t_out_c : float, [degC]
+        Room and outdoor air.
+    beam_wm2 : float, [W/m2]
+        Beam irradiance on the façade plane.
+    profile_deg : float, [deg]
+        Solar profile angle on the façade.
+    previous_afr : int, optional
+        The regime now applied (for hysteresis).
+    """
+    b = cfg.control.baseline
+    trace = []
+    sunny = beam_wm2 > b.sun_threshold_wm2
+    if not sunny:
+        phi = b.night_angle_deg
+        trace.append(f"louver: no sun (beam {beam_wm2:.0f} W/m2) -> closed {phi:+.0f} deg")
+    elif heating:
+        phi = profile_deg
+        trace.append(f"louver: heating in sun -> along the rays (profile {profile_deg:+.1f} deg)")
+    else:
+        phi = profile_deg - 90.0 if profile_deg >= 0 else profile_deg + 90.0
+        trace.append(f"louver: cooling in sun -> across the rays ({phi:+.1f} deg)")
+    phi_q = quantise_louver(phi, cfg)
+
+    was_open = previous_afr is not None and previous_afr != CLOSED
+    band = b.hysteresis_k if was_open else 0.0
+    if t5_c is None:
+        afr = CLOSED
+        trace.append("regime: cavity temperature unusable -> closed")
+    elif heating:
+        margin = b.heating_open_above_room_k - band
+        if t5_c > t_in_c + margin:
+            afr = INSIDE_CIRCULATION
+            trace.append(f"regime: cavity {t5_c:.1f} > room {t_in_c:.1f} + {margin:.1f} K -> "
+                         "inside circulation")
+        else:
+            afr = CLOSED
+            trace.append("regime: cavity not warm enough -> closed")
+    else:
+        flush = b.cooling_flush_above_outdoor_k - band
+        night = b.night_cooling_below_room_k - band
+        if sunny and t5_c > t_out_c + flush:
+            afr = OUTSIDE_CIRCULATION
+            trace.append(f"regime: cavity {t5_c:.1f} > outdoor {t_out_c:.1f} + {flush:.1f} K -> "
+                         "outside circulation")
+        elif not sunny and t_out_c < t_in_c - night:
+            afr = NIGHT_FLUSH
+            trace.append(f"regime: outdoor {t_out_c:.1f} < room {t_in_c:.1f} - {night:.1f} K -> "
+                         "night flush")
+        else:
+            afr = CLOSED
+            trace.append("regime: no useful air exchange -> closed")
+    if afr not in cfg.openings.available_regimes():
+        trace.append(f"regime {afr} needs dampers this panel lacks -> closed")
+        afr = CLOSED
+    or_pct = 0.0 if afr == CLOSED else 100.0
+    return Decision(phi_deg=phi_q, afr=afr, or_pct=or_pct, method="rule", cost_j=math.nan,
+                    trace=tuple(trace))
