@@ -64,6 +64,13 @@ class Control:
     refine_max_pairs: int = setting(
         4, doc="At most this many louver/regime pairs are refined (the best coarse ones)",
         ge=1, le=200)
+    screening_step_s: float = setting(
+        300.0, doc="Model step of the screening pass over all candidates (the best ones are "
+        "then evaluated at the model's own step)", unit="s", gt=0, le=3600)
+    screening_tolerance_k: float = setting(
+        1e-3, doc="Coupling tolerance of the screening pass", unit="K", gt=0, le=0.1)
+    full_candidates: int = setting(
+        8, doc="Screened candidates evaluated at full resolution", ge=1, le=500)
     louver_move_penalty_wh: float = setting(
         0.0, doc="Cost added per 18° louver step moved (motor wear)", unit="Wh", ge=0)
     time_budget_s: float = setting(

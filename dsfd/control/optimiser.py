@@ -14,6 +14,7 @@ horizon rollout (:meth:`LumpedModel.rollout`).
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -117,67 +118,120 @@ class HorizonEvaluator:
         return terms, traj.label[:, 0]
 
 
-def optimise(cfg: PanelConfig, model: LumpedModel, optics: FacadeOptics,
-             problem: ControlProblem) -> Decision:
-    """Exact over louver positions × damper sets, bounded search over OR (module docstring)."""
-    ctl: Control = cfg.control
-    angles = np.asarray(cfg.louver.angles_deg() if cfg.louver is not None else (0.0,))
-    regimes = distinct_regimes(cfg.openings.available_regimes())
-    open_regimes = np.array([r for r in regimes if r != CLOSED], int)
-    grid = np.asarray(ctl.or_grid_pct, float) / 100.0
-    ev = HorizonEvaluator(cfg, model, optics, problem, angles)
-    n_a, n_r, n_g = len(angles), len(open_regimes), len(grid)
-    trace = [f"candidates: {n_a} louver positions x {len(regimes)} damper sets "
-             f"(regimes {list(regimes)}), OR grid {list(ctl.or_grid_pct)} %"]
+def coarsen(forcing: Forcing, factor: int) -> Forcing:
+    """Block means of a horizon's boundary over ``factor`` consecutive steps.
 
-    # Stage 1: every louver position x open damper set x coarse OR, and closed per angle.
-    a_idx, r_idx, g_idx = (m.ravel() for m in np.meshgrid(np.arange(n_a), np.arange(n_r),
-                                                          np.arange(n_g), indexing="ij"))
-    cand_a = [a_idx]
-    cand_r = [open_regimes[r_idx]]
-    cand_o = [grid[g_idx]]
-    if CLOSED in regimes:
-        cand_a.append(np.arange(n_a))
-        cand_r.append(np.full(n_a, CLOSED))
-        cand_o.append(np.zeros(n_a))
-    all_a, all_r, all_o = (np.concatenate(c) for c in (cand_a, cand_r, cand_o))
-    terms, labels = ev.evaluate(all_a, all_r, all_o) if all_a.size else (None, None)
-    best = _Best.of(terms, labels, all_a, all_r, all_o)
-    trace.append(f"stage 1: {all_a.size} rollouts, best {best.describe(angles)}")
+    A screening pass steps the model with ``factor`` times the step length over these
+    means (the exact ZOH is exact for any step; only the weather and the linearisation
+    are held longer).
+    """
+    n = forcing.time_s.shape[0]
+    starts = np.arange(0, n, factor)
+    counts = np.diff(np.append(starts, n))
+    return Forcing(*(np.add.reduceat(np.asarray(v, float), starts) / counts for v in forcing))
 
-    # Stage 2: refine OR for pairs within the margin of the best coarse cost.
-    if n_r and ctl.or_refine_rounds > 0:
-        coarse = terms.cost_j[: n_a * n_r * n_g].reshape(n_a, n_r, n_g)
-        pair_best = coarse.min(axis=2)
+
+class MpcOptimiser:
+    """Exact over louver positions × damper sets, bounded search over OR (module docstring).
+
+    Stages: (1) screening of every louver position × damper set × coarse OR with a coarse
+    time step; (2) the best candidates of the screening at full resolution; (3) bounded OR
+    refinement of the best pairs at full resolution. The decision is the best full-resolution
+    candidate. Building the optimiser once per panel keeps its models and optics caches.
+    """
+
+    def __init__(self, cfg: PanelConfig, model: LumpedModel | None = None,
+                 optics: FacadeOptics | None = None) -> None:
+        self.cfg = cfg
+        self.model = model or LumpedModel(cfg)
+        self.optics = optics or FacadeOptics(cfg)
+        ctl = cfg.control
+        self.factor = max(1, round(ctl.screening_step_s / cfg.model.step_s))
+        coarse = dataclasses.replace(cfg.model, step_s=cfg.model.step_s * self.factor,
+                                     coupling_tolerance_k=ctl.screening_tolerance_k)
+        self.screen_model = LumpedModel(dataclasses.replace(cfg, model=coarse))
+        self.angles = np.asarray(cfg.louver.angles_deg() if cfg.louver is not None else (0.0,))
+        self.regimes = distinct_regimes(cfg.openings.available_regimes())
+
+    def decide(self, problem: ControlProblem) -> Decision:
+        ctl: Control = self.cfg.control
+        angles, regimes = self.angles, self.regimes
+        open_regimes = np.array([r for r in regimes if r != CLOSED], int)
+        grid = np.asarray(ctl.or_grid_pct, float) / 100.0
+        n_a, n_r, n_g = len(angles), len(open_regimes), len(grid)
+        trace = [f"candidates: {n_a} louver positions x {len(regimes)} damper sets "
+                 f"(regimes {list(regimes)}), OR grid {list(ctl.or_grid_pct)} %"]
+        # Stage 1: screening of every louver position x open set x coarse OR, and closed.
+        a_idx, r_idx, g_idx = (m.ravel() for m in np.meshgrid(
+            np.arange(n_a), np.arange(n_r), np.arange(n_g), indexing="ij"))
+        cand = [(a_idx, open_regimes[r_idx], grid[g_idx])]
+        if CLOSED in regimes:
+            cand.append((np.arange(n_a), np.full(n_a, CLOSED), np.zeros(n_a)))
+        all_a, all_r, all_o = (np.concatenate(c) for c in zip(*cand, strict=True))
+        screen_problem = dataclasses.replace(problem,
+                                             forcing=coarsen(problem.forcing, self.factor))
+        screen = HorizonEvaluator(self.cfg, self.screen_model, self.optics, screen_problem,
+                                  angles)
+        s_terms, _ = screen.evaluate(all_a, all_r, all_o)
+        order = np.argsort(s_terms.cost_j, kind="stable")[: ctl.full_candidates]
+        trace.append(f"stage 1: screened {all_a.size} candidates at "
+                     f"{self.screen_model.dt:g} s steps")
+        # Stage 2: the best screened candidates at full resolution.
+        full = HorizonEvaluator(self.cfg, self.model, self.optics, problem, angles)
+        fa, fr, fo = all_a[order], all_r[order], all_o[order]
+        terms, labels = full.evaluate(fa, fr, fo)
+        best = _Best.of(terms, labels, fa, fr, fo)
+        trace.append(f"stage 2: {len(order)} at full resolution, best {best.describe(angles)}")
+        # Stage 3: bounded OR refinement of the best open pairs.
+        if n_r and ctl.or_refine_rounds > 0:
+            best = self._refine(full, terms, fa, fr, fo, grid, best, trace)
+        return best.decision(angles, method="mpc",
+                             rollouts=full.rollouts + screen.rollouts, trace=tuple(trace))
+
+    def _refine(self, ev: HorizonEvaluator, terms: CostTerms, fa: np.ndarray, fr: np.ndarray,
+                fo: np.ndarray, grid: np.ndarray, best: _Best, trace: list[str]) -> _Best:
+        ctl = self.cfg.control
         scale = _cost_scale(terms)
-        close = np.argwhere(pair_best <= best.cost + ctl.refine_margin_pct / 100.0 * scale)
-        order = np.argsort(pair_best[close[:, 0], close[:, 1]], kind="stable")
-        close = close[order[: ctl.refine_max_pairs]]
-        g_best = coarse.argmin(axis=2)
-        lo = grid[np.maximum(g_best - 1, 0)]
-        hi = grid[np.minimum(g_best + 1, n_g - 1)]
-        pa, pr = close[:, 0], close[:, 1]
-        lo_p, hi_p = lo[pa, pr], hi[pa, pr]
-        pair_cost = pair_best[pa, pr].copy()
-        pair_or = grid[g_best[pa, pr]].copy()
+        keep = (fr != CLOSED) & (terms.cost_j <= best.cost + ctl.refine_margin_pct / 100.0
+                                 * scale)
+        pairs: dict[tuple[int, int], tuple[float, float]] = {}
+        for i in np.flatnonzero(keep)[np.argsort(terms.cost_j[keep], kind="stable")]:
+            key = (int(fa[i]), int(fr[i]))
+            if key not in pairs and len(pairs) < ctl.refine_max_pairs:
+                pairs[key] = (float(terms.cost_j[i]), float(fo[i]))
+        if not pairs:
+            return best
+        pa = np.array([k[0] for k in pairs])
+        pr = np.array([k[1] for k in pairs])
+        pair_cost = np.array([v[0] for v in pairs.values()])
+        pair_or = np.array([v[1] for v in pairs.values()])
+        spacing = float(np.max(np.diff(grid)))
+        lo_p = np.clip(pair_or - spacing, 0.0, 1.0)
+        hi_p = np.clip(pair_or + spacing, 0.0, 1.0)
         k = ctl.or_refine_points
+        rows = np.arange(len(pa))
         for _ in range(ctl.or_refine_rounds):
             pts = lo_p[:, None] + (hi_p - lo_p)[:, None] * (np.arange(1, k + 1) / (k + 1))
-            ra = np.repeat(pa, k)
-            rr = np.repeat(open_regimes[pr], k)
+            ra, rr = np.repeat(pa, k), np.repeat(pr, k)
             t2, l2 = ev.evaluate(ra, rr, pts.ravel())
             best = best.better(_Best.of(t2, l2, ra, rr, pts.ravel()))
             c2 = t2.cost_j.reshape(-1, k)
             j = c2.argmin(axis=1)
-            improved = c2[np.arange(len(j)), j] < pair_cost
-            pair_cost = np.where(improved, c2[np.arange(len(j)), j], pair_cost)
-            pair_or = np.where(improved, pts[np.arange(len(j)), j], pair_or)
+            improved = c2[rows, j] < pair_cost
+            pair_cost = np.where(improved, c2[rows, j], pair_cost)
+            pair_or = np.where(improved, pts[rows, j], pair_or)
             width = (hi_p - lo_p) / (k + 1)
             lo_p = np.clip(pair_or - width, 0.0, 1.0)
             hi_p = np.clip(pair_or + width, 0.0, 1.0)
-        trace.append(f"stage 2: refined OR of {len(pa)} pair(s) in {ctl.or_refine_rounds} "
-                     f"round(s) of {k}, best {best.describe(angles)}")
-    return best.decision(angles, method="mpc", rollouts=ev.rollouts, trace=tuple(trace))
+        trace.append(f"stage 3: refined OR of {len(pa)} pair(s) in {ctl.or_refine_rounds} "
+                     f"round(s) of {k}, best {best.describe(self.angles)}")
+        return best
+
+
+def optimise(cfg: PanelConfig, model: LumpedModel, optics: FacadeOptics,
+             problem: ControlProblem) -> Decision:
+    """One MPC decision (convenience wrapper of :class:`MpcOptimiser`)."""
+    return MpcOptimiser(cfg, model, optics).decide(problem)
 
 
 def _cost_scale(terms: CostTerms) -> float:

@@ -306,6 +306,7 @@ def one_node_flows(
     *,
     tol_kgs: float = 1e-15,
     max_iter: int = 100,
+    p_c_start: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """General one-node cavity flow solver (physics §8.4.4).
 
@@ -326,6 +327,9 @@ def one_node_flows(
         Cavity air density.
     dp_t : float, [Pa]
         Regularisation threshold.
+    p_c_start : array (B,), optional, [Pa]
+        Starting guesses (e.g. the previous solution); NaN or outside the bracket means
+        "use the conductance-weighted mean head".
 
     Returns
     -------
@@ -359,6 +363,9 @@ def one_node_flows(
     w = np.sqrt(inv_k)
     pc = np.where(w.sum(axis=1) > 0, (np.where(open_, head, 0.0) * w).sum(axis=1)
                   / np.maximum(w.sum(axis=1), 1e-300), 0.5 * (lo + hi))
+    if p_c_start is not None:
+        usable = np.isfinite(p_c_start) & (p_c_start > lo) & (p_c_start < hi)
+        pc = np.where(usable, p_c_start, pc)
     rows = np.arange(len(pc))
     for _ in range(max_iter):
         if rows.size == 0:

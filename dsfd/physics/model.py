@@ -13,6 +13,7 @@ States are x1..x6 [K] (L1, L2, L3, louver, cavity air, DGU gap gas); parameters
 
 from __future__ import annotations
 
+import dataclasses
 from typing import NamedTuple
 
 import numpy as np
@@ -192,7 +193,8 @@ class LumpedModel:
         return coupled_step(self.nc, x, inp, theta, setup)
 
     def rollout(self, x0: np.ndarray, regime: np.ndarray, or_: np.ndarray,
-                inputs: StepInputs, theta: np.ndarray) -> Trajectory:
+                inputs: StepInputs, theta: np.ndarray, *,
+                coupling_tol_k: float | None = None) -> Trajectory:
         """Roll a batch of control sequences out over a horizon.
 
         Parameters
@@ -204,6 +206,9 @@ class LumpedModel:
         inputs : StepInputs
             Fields broadcastable to (B, H) (typically (H,) weather with (B, H) optics).
         theta : array broadcastable to (B, H, 9)
+        coupling_tol_k : float, optional, [K]
+            Override of the coupling fixed-point tolerance (a screening pass of the
+            optimiser can afford a looser one).
 
         Returns
         -------
@@ -217,12 +222,14 @@ class LumpedModel:
         regime, or_, inp, theta = self._batch(shape, regime, or_, inputs, theta)
         setup = self._flow_setup(regime, or_, inp, theta)
         x = np.array(np.broadcast_to(x, (nb, 6)))
+        nc = self.nc if coupling_tol_k is None else dataclasses.replace(self.nc,
+                                                                         tol_k=coupling_tol_k)
         xs = np.empty((nb, horizon + 1, 6))
         xs[:, 0] = x
         cols = []
         guess = None
         for k in range(horizon):
-            res = coupled_step(self.nc, x, inp.at((slice(None), k)), theta[:, k],
+            res = coupled_step(nc, x, inp.at((slice(None), k)), theta[:, k],
                                setup.at((slice(None), k)), guess)
             cols.append(res)
             # Warm start: under unchanged controls the cavity air changes by about as much

@@ -1,0 +1,76 @@
+"""The optimiser of Eq. 6 against brute force, the paper's SQP and physical expectations."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from dsfd.config import load_panel
+from dsfd.control.bruteforce import brute_force
+from dsfd.control.optimiser import ControlProblem, MpcOptimiser, distinct_regimes
+from dsfd.control.paper_sqp import optimise_paper_sqp
+from dsfd.physics.constants import T_ZERO
+from dsfd.physics.forcing import step_inputs
+from dsfd.sim.control_cases import day_forcing, random_problems
+from dsfd.sim.openloop import first_step
+from tests.conftest import PANELS
+
+
+@pytest.fixture(scope="module")
+def mpc(suwon):
+    return MpcOptimiser(suwon)
+
+
+def test_one_representative_per_damper_set(suwon):
+    assert distinct_regimes(suwon.openings.available_regimes()) == (1, 3, 5, 6, 9, 10)
+    assert distinct_regimes((3, 4, 10)) == (3, 10)
+
+
+def _gap_pct(cost, ref):
+    return 100.0 * (cost - ref.cost_j) / max(abs(ref.cost_j), 3600.0)
+
+
+def test_matches_brute_force_and_never_loses_to_paper_sqp(suwon, mpc):
+    """Random states and weathers: within 0.1 % of brute force (OR in 1 % steps)."""
+    for problem in random_problems(suwon, 4, seed=11):
+        d = mpc.decide(problem)
+        ref = brute_force(suwon, mpc.model, mpc.optics, problem, or_step_pct=1.0)
+        assert _gap_pct(d.cost_j, ref) <= 0.1, (d, ref)
+        sqp = optimise_paper_sqp(suwon, mpc.model, mpc.optics, problem)
+        assert d.cost_j <= sqp.cost_j + 1e-6 * abs(sqp.cost_j) + 1e-3
+
+
+def test_commands_lie_on_the_actuator_grid(suwon, mpc):
+    angles = set(suwon.louver.angles_deg())
+    for problem in random_problems(suwon, 6, seed=5):
+        for d in (mpc.decide(problem), optimise_paper_sqp(suwon, mpc.model, mpc.optics,
+                                                          problem)):
+            assert d.phi_deg in angles
+            assert d.afr in suwon.openings.available_regimes()
+            assert 0.0 <= d.or_pct <= 100.0
+            if d.afr == 10:
+                assert d.or_pct == 0.0
+            assert d.trace
+
+
+def test_sunny_winter_day_brings_cavity_air_into_the_room(suwon, mpc):
+    """Clear winter noon, cavity hotter than the room: the regime delivers cavity air."""
+    forcing = day_forcing(suwon)
+    k = int(np.argmax(forcing.beam_wm2))
+    window = forcing.window(k, k + suwon.control.horizon_steps)
+    theta = mpc.model.default_theta()
+    inp = step_inputs(window, mpc.optics.loads(window, 0.0))
+    x0 = mpc.model.steady_state([10], 0.0, first_step(inp), theta)[0]
+    assert x0[4] - T_ZERO > window.t_in_k[0] - T_ZERO + 10  # hot closed cavity
+    d = mpc.decide(ControlProblem(x0=x0, forcing=window, theta=theta, heating=True))
+    assert d.afr in (1, 2, 7, 8, 9)
+    assert d.terms_j["q_air_j"] > 0
+    assert d.or_pct > 0
+
+
+def test_no_louver_panel_decides_without_louver_positions():
+    cfg = load_panel(PANELS / "suwon-south-no-louver.yaml")
+    opt = MpcOptimiser(cfg)
+    problem = random_problems(cfg, 1, seed=2)[0]
+    d = opt.decide(problem)
+    assert d.phi_deg == 0.0
