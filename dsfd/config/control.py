@@ -53,16 +53,16 @@ class Control:
     or_grid_pct: tuple[float, ...] = setting(
         (0.0, 50.0, 100.0), doc="Coarse damper openings evaluated for every louver/regime pair",
         unit="%", ge=0, le=100)
-    or_refine_rounds: int = setting(
-        2, doc="Rounds of damper-opening refinement around the best point so far", ge=0, le=10)
     or_refine_points: int = setting(
-        8, doc="Openings evaluated per refinement round (inside the current bracket)", ge=2,
-        le=50)
-    refine_margin_pct: float = setting(
-        2.0, doc="Refine every louver/regime pair whose coarse cost is within this margin of the "
-        "best (relative to the horizon's heat-flow scale)", unit="%", ge=0, le=100)
+        4, doc="Openings evaluated inside the coarse-grid bracket of each refined pair",
+        ge=1, le=50)
+    or_refine_rounds: int = setting(
+        1, doc="Parabolic refinement rounds of the best pair's opening", ge=0, le=10)
+    flat_tolerance_pct: float = setting(
+        0.01, doc="Skip the parabolic refinement when the best pair's cost varies less than "
+        "this over its OR bracket", unit="%", ge=0, le=10)
     refine_max_pairs: int = setting(
-        4, doc="At most this many louver/regime pairs are refined (the best coarse ones)",
+        4, doc="Louver/regime pairs whose OR is refined at full resolution (the best screened)",
         ge=1, le=200)
     screening_step_s: float = setting(
         300.0, doc="Model step of the screening pass over all candidates (the best ones are "

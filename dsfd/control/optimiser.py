@@ -173,72 +173,80 @@ class MpcOptimiser:
         screen = HorizonEvaluator(self.cfg, self.screen_model, self.optics, screen_problem,
                                   angles)
         s_terms, _ = screen.evaluate(all_a, all_r, all_o)
-        order = np.argsort(s_terms.cost_j, kind="stable")[: ctl.full_candidates]
         trace.append(f"stage 1: screened {all_a.size} candidates at "
                      f"{self.screen_model.dt:g} s steps")
-        # Stage 2: the best screened candidates at full resolution.
+        # Stage 2, one full-resolution batch: the best screened candidates, and an OR
+        # bracket around the screened optimum of the best open louver/regime pairs.
+        finalists = np.argsort(s_terms.cost_j, kind="stable")[: ctl.full_candidates]
+        fa, fr, fo = all_a[finalists], all_r[finalists], all_o[finalists]
+        if n_r:
+            coarse = s_terms.cost_j[: n_a * n_r * n_g].reshape(n_a, n_r, n_g)
+            pair_cost = coarse.min(axis=2)
+            g_best = coarse.argmin(axis=2)
+            top = np.argsort(pair_cost, axis=None, kind="stable")[: ctl.refine_max_pairs]
+            pa, pr = np.unravel_index(top, pair_cost.shape)
+            spacing = float(np.max(np.diff(grid)))
+            centre = grid[g_best[pa, pr]]
+            k = ctl.or_refine_points
+            frac = np.linspace(-1.0, 1.0, k + 2)[1:-1]
+            pts = np.clip(centre[:, None] + spacing * frac[None, :], 0.0, 1.0)
+            fa = np.concatenate([fa, np.repeat(pa, k)])
+            fr = np.concatenate([fr, np.repeat(open_regimes[pr], k)])
+            fo = np.concatenate([fo, pts.ravel()])
         full = HorizonEvaluator(self.cfg, self.model, self.optics, problem, angles)
-        fa, fr, fo = all_a[order], all_r[order], all_o[order]
         terms, labels = full.evaluate(fa, fr, fo)
         best = _Best.of(terms, labels, fa, fr, fo)
-        trace.append(f"stage 2: {len(order)} at full resolution, best {best.describe(angles)}")
-        # Stage 3: bounded OR refinement of the best open pairs.
-        if n_r and ctl.or_refine_rounds > 0:
-            best = self._refine(full, terms, fa, fr, fo, grid, best, trace)
+        trace.append(f"stage 2: {fa.size} at full resolution ({len(finalists)} finalists, "
+                     f"OR brackets of {min(ctl.refine_max_pairs, n_a * n_r)} pairs), best "
+                     f"{best.describe(angles)}")
+        # Stage 3: parabolic refinement of the best pair's OR.
+        for _ in range(ctl.or_refine_rounds if best.regime != CLOSED else 0):
+            same = (fa == best.angle_idx) & (fr == best.regime)
+            spread = float(np.ptp(terms.cost_j[same])) if same.sum() > 1 else 0.0
+            if spread <= ctl.flat_tolerance_pct / 100.0 * max(abs(best.cost), 1.0):
+                break  # the cost hardly depends on OR here: nothing to gain
+            new = _parabolic_points(fo[same], terms.cost_j[same])
+            if new.size == 0:
+                break
+            na = np.full(new.size, best.angle_idx)
+            nr = np.full(new.size, best.regime)
+            t3, l3 = full.evaluate(na, nr, new)
+            best = best.better(_Best.of(t3, l3, na, nr, new))
+            fa, fr, fo = (np.concatenate(v) for v in ((fa, na), (fr, nr), (fo, new)))
+            terms = CostTerms(*(np.concatenate(v) for v in zip(terms, t3, strict=True)))
+        trace.append(f"stage 3: OR refined, best {best.describe(angles)}")
         return best.decision(angles, method="mpc",
                              rollouts=full.rollouts + screen.rollouts, trace=tuple(trace))
 
-    def _refine(self, ev: HorizonEvaluator, terms: CostTerms, fa: np.ndarray, fr: np.ndarray,
-                fo: np.ndarray, grid: np.ndarray, best: _Best, trace: list[str]) -> _Best:
-        ctl = self.cfg.control
-        scale = _cost_scale(terms)
-        keep = (fr != CLOSED) & (terms.cost_j <= best.cost + ctl.refine_margin_pct / 100.0
-                                 * scale)
-        pairs: dict[tuple[int, int], tuple[float, float]] = {}
-        for i in np.flatnonzero(keep)[np.argsort(terms.cost_j[keep], kind="stable")]:
-            key = (int(fa[i]), int(fr[i]))
-            if key not in pairs and len(pairs) < ctl.refine_max_pairs:
-                pairs[key] = (float(terms.cost_j[i]), float(fo[i]))
-        if not pairs:
-            return best
-        pa = np.array([k[0] for k in pairs])
-        pr = np.array([k[1] for k in pairs])
-        pair_cost = np.array([v[0] for v in pairs.values()])
-        pair_or = np.array([v[1] for v in pairs.values()])
-        spacing = float(np.max(np.diff(grid)))
-        lo_p = np.clip(pair_or - spacing, 0.0, 1.0)
-        hi_p = np.clip(pair_or + spacing, 0.0, 1.0)
-        k = ctl.or_refine_points
-        rows = np.arange(len(pa))
-        for _ in range(ctl.or_refine_rounds):
-            pts = lo_p[:, None] + (hi_p - lo_p)[:, None] * (np.arange(1, k + 1) / (k + 1))
-            ra, rr = np.repeat(pa, k), np.repeat(pr, k)
-            t2, l2 = ev.evaluate(ra, rr, pts.ravel())
-            best = best.better(_Best.of(t2, l2, ra, rr, pts.ravel()))
-            c2 = t2.cost_j.reshape(-1, k)
-            j = c2.argmin(axis=1)
-            improved = c2[rows, j] < pair_cost
-            pair_cost = np.where(improved, c2[rows, j], pair_cost)
-            pair_or = np.where(improved, pts[rows, j], pair_or)
-            width = (hi_p - lo_p) / (k + 1)
-            lo_p = np.clip(pair_or - width, 0.0, 1.0)
-            hi_p = np.clip(pair_or + width, 0.0, 1.0)
-        trace.append(f"stage 3: refined OR of {len(pa)} pair(s) in {ctl.or_refine_rounds} "
-                     f"round(s) of {k}, best {best.describe(self.angles)}")
-        return best
+
+def _parabolic_points(ors: np.ndarray, costs: np.ndarray) -> np.ndarray:
+    """New openings to try around the best of ``ors``: the vertex of the parabola through
+    the best point and its neighbours, and the midpoints towards both neighbours."""
+    order = np.argsort(ors)
+    x, y = ors[order], costs[order]
+    x, idx = np.unique(x, return_index=True)
+    y = y[idx]
+    if x.size < 2:
+        return np.zeros(0)
+    i = int(np.argmin(y))
+    lo, hi = max(i - 1, 0), min(i + 1, x.size - 1)
+    cands = [0.5 * (x[lo] + x[i]), 0.5 * (x[i] + x[hi])]
+    if 0 < i < x.size - 1:
+        x0, x1, x2 = x[i - 1], x[i], x[i + 1]
+        y0, y1, y2 = y[i - 1], y[i], y[i + 1]
+        den = (x1 - x0) * (y1 - y2) - (x1 - x2) * (y1 - y0)
+        if den != 0:
+            vertex = x1 - 0.5 * ((x1 - x0) ** 2 * (y1 - y2) - (x1 - x2) ** 2 * (y1 - y0)) / den
+            if x0 < vertex < x2:
+                cands.append(vertex)
+    out = np.unique(np.clip(cands, 0.0, 1.0))
+    return out[~np.isin(out, x)]
 
 
 def optimise(cfg: PanelConfig, model: LumpedModel, optics: FacadeOptics,
              problem: ControlProblem) -> Decision:
     """One MPC decision (convenience wrapper of :class:`MpcOptimiser`)."""
     return MpcOptimiser(cfg, model, optics).decide(problem)
-
-
-def _cost_scale(terms: CostTerms) -> float:
-    """Magnitude of the horizon's heat flows, to express margins relative to it [J]."""
-    mags = np.abs(terms.q_cv_rd_j) + np.abs(terms.q_sol_j) + np.abs(terms.q_air_j) + np.abs(
-        terms.q_da_j)
-    return float(max(np.median(mags), 1.0))
 
 
 @dataclass(frozen=True)
