@@ -17,8 +17,10 @@ States, instantaneous readings at ``time_utc``:
     anemometer speed (unsigned) [m/s].
 Weather, mean over the interval that ENDS at ``time_utc`` (logger convention):
     ``t_out_c`` [°C], ``ghi_wm2``, ``dni_wm2``, ``dhi_wm2`` [W/m2], ``poa_wm2`` plane-of-façade
-    global [W/m2], ``wind_speed_ms`` [m/s], ``wind_dir_deg`` [deg from N],
-    ``pressure_hpa`` [hPa], ``rh_pct`` [%].
+    global [W/m2], ``poa_diffuse_wm2`` plane-of-façade diffuse [W/m2] (with ``poa_wm2`` it
+    replaces GHI/DNI/DHI for the façade: data sets that measured on the façade plane),
+    ``wind_speed_ms`` [m/s], ``wind_dir_deg`` [deg from N], ``pressure_hpa`` [hPa],
+    ``rh_pct`` [%].
 Simulation extras (never needed, written by the simulated plant for analysis):
     columns starting with ``truth_`` (e.g. ``truth_x5_c``, ``truth_label``).
 
@@ -42,8 +44,8 @@ import numpy as np
 
 CONTROL_COLUMNS = ("phi_deg", "afr", "or_pct")
 STATE_COLUMNS = ("x1_c", "x2_c", "x3_c", "x4_c", "x5_c", "t_room_c", "v_cav_ms")
-WEATHER_COLUMNS = ("t_out_c", "ghi_wm2", "dni_wm2", "dhi_wm2", "poa_wm2", "wind_speed_ms",
-                   "wind_dir_deg", "pressure_hpa", "rh_pct")
+WEATHER_COLUMNS = ("t_out_c", "ghi_wm2", "dni_wm2", "dhi_wm2", "poa_wm2", "poa_diffuse_wm2",
+                   "wind_speed_ms", "wind_dir_deg", "pressure_hpa", "rh_pct")
 KNOWN_COLUMNS = (*CONTROL_COLUMNS, *STATE_COLUMNS, *WEATHER_COLUMNS)
 EXTRA_PREFIX = "truth_"
 

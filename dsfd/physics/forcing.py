@@ -5,8 +5,9 @@ Two stages, both pure and vectorised over time steps:
 * :func:`facade_forcing` turns measured weather at the step midpoints (errata E19.2) into
   the façade boundary: sun position, plane-of-façade beam and diffuse irradiance (Erbs
   decomposition where DNI/DHI are not measured, Hay–Davies or isotropic transposition,
-  physics §4), the exterior radiant temperature (sky model, §6.1), the local wind speed
-  (power-law profile, §7.2) and the wind pressure coefficients of the openings (§8.2).
+  physics §4; or measured plane-of-façade total and diffuse irradiance), the exterior
+  radiant temperature (sky model, §6.1), the local wind speed (power-law profile, §7.2)
+  and the wind pressure coefficients of the openings (§8.2).
 * :class:`FacadeOptics` adds what depends on the louver angle φ: absorbed short-wave per
   node (§5.4, E3), the cavity long-wave exchange factors (§6.2), the transmitted solar
   gain and the daylighting benefit Q_DA (§12.4), for any array of louver angles at once.
@@ -60,6 +61,11 @@ class WeatherInputs(NamedTuple):
         Room air and mean radiant temperature.
     t_dew_k : [K]
         Dew point (NaN if unknown; only the Clark–Allen sky model uses it).
+    poa_global_wm2, poa_diffuse_wm2 : [W/m2], optional
+        Measured total and diffuse irradiance on the façade plane. Where both are finite
+        they replace the decomposition and transposition of GHI/DNI/DHI: beam on the
+        façade = total − diffuse (0 with the sun behind the façade, which then counts as
+        diffuse). ``None`` (default) or NaN: computed from GHI/DNI/DHI as before.
     """
 
     time_s: np.ndarray
@@ -73,6 +79,8 @@ class WeatherInputs(NamedTuple):
     t_in_k: np.ndarray
     t_mrt_k: np.ndarray
     t_dew_k: np.ndarray
+    poa_global_wm2: np.ndarray | None = None
+    poa_diffuse_wm2: np.ndarray | None = None
 
 
 class Forcing(NamedTuple):
@@ -130,7 +138,10 @@ def facade_forcing(cfg: PanelConfig, w: WeatherInputs, *,
     site, fac = cfg.site, cfg.facade
     sun = solar_position(w.time_s, site.latitude_deg, site.longitude_deg)
     dni_extra = extraterrestrial_irradiance(w.time_s)
+    poa = _plane_of_array(w)
     ghi = np.clip(np.asarray(w.ghi_wm2, float), 0.0, None)
+    if poa is not None:  # façade-plane data only: GHI may be absent
+        ghi = np.where(np.isfinite(ghi), ghi, 0.0)
     split = erbs(ghi, sun.zenith_deg, dni_extra)
     dni = np.where(np.isfinite(w.dni_wm2), w.dni_wm2, split.dni)
     dhi = np.where(np.isfinite(w.dhi_wm2), w.dhi_wm2, split.dhi)
@@ -146,6 +157,12 @@ def facade_forcing(cfg: PanelConfig, w: WeatherInputs, *,
         t_sky = sky_temperature_clark_allen(w.t_out_k, dew, 0.0)
     else:
         t_sky = sky_temperature_swinbank(w.t_out_k)
+    beam, diffuse = fi.beam, fi.sky_diffuse + fi.ground_diffuse
+    if poa is not None:
+        use, total, diff = poa
+        front = (fi.aoi_deg < 90.0) & ~below
+        beam = np.where(use, np.where(front, np.clip(total - diff, 0.0, None), 0.0), beam)
+        diffuse = np.where(use, np.where(front, diff, total), diffuse)
     geom = AirflowGeometry.from_panel(cfg)
     cp_b, cp_t = geom.wind_pressure_coefficients(w.wind_dir_deg, fac.azimuth_deg)
     return Forcing(
@@ -163,12 +180,26 @@ def facade_forcing(cfg: PanelConfig, w: WeatherInputs, *,
         azimuth_deg=sun.azimuth_deg,
         aoi_deg=fi.aoi_deg,
         profile_deg=fi.profile_deg,
-        beam_wm2=fi.beam,
-        diffuse_wm2=fi.sky_diffuse + fi.ground_diffuse,
+        beam_wm2=beam,
+        diffuse_wm2=diffuse,
         ghi_wm2=ghi,
         dni_wm2=dni,
         dhi_wm2=dhi,
     )
+
+
+def _plane_of_array(w: WeatherInputs) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """(use, total, diffuse) of measured façade-plane irradiance [W/m2], or None if absent."""
+    if w.poa_global_wm2 is None or w.poa_diffuse_wm2 is None:
+        return None
+    total = np.asarray(w.poa_global_wm2, float)
+    diff = np.asarray(w.poa_diffuse_wm2, float)
+    use = np.isfinite(total) & np.isfinite(diff)
+    if not use.any():
+        return None
+    total = np.clip(np.where(use, total, 0.0), 0.0, None)
+    diff = np.minimum(np.clip(np.where(use, diff, 0.0), 0.0, None), total)
+    return use, total, diff
 
 
 class OpticalLoads(NamedTuple):

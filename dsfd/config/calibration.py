@@ -1,0 +1,131 @@
+"""Settings of the self-calibration (Eq. 3 of the paper): the ``calibration:`` section.
+
+YAML shape (every key optional; the defaults suit a 1-minute controller cycle)::
+
+    calibration:
+      window_h: 4.0               # moving window of Eq. 3
+      forgetting_factor: 0.7      # λ per hour of age: weight λ^(age/1 h)
+      horizon_steps: 15           # lead times 1..15 of the multi-step residual
+      start_stride_steps: 4       # a rollout starts every 4th step of the window
+      update_interval_s: 600      # one on-line update every 10 min
+      max_nfev: 8                 # model evaluations per on-line update
+      offline_max_nfev: 40        # ... for the off-line batch fit
+      loss: soft_l1               # robust loss of scipy.optimize.least_squares
+      f_scale: 1.0                # soft threshold of the loss, in residual scales
+      temperature_scale_k: 0.3    # residual scale of x1..x5
+      velocity_scale_ms: 0.01     # residual scale of the cavity speed |v|
+      adaptive_scales: true       # ... re-estimated per output at the start of each fit
+      prior_weight: 1.0           # arrival-cost weight
+      prior_log_sd: 0.7           # spread of the default θ (log space)
+      prior_sd_n: 0.15            # spread of the default exponent n (linear)
+      drift_log_sd_per_h: 0.05    # random-walk growth of the prior per √hour
+      heat_offsets: true          # also fit heat-flux offsets on the measured nodes
+      offset_sd_wm2: 20.0         # their prior spread
+      offset_tracking_s: 600      # offsets follow each measurement between fits (τ)
+      innovation_smoothing_s: 300 # ... through a low-pass on the innovations
+      broyden_updates: 1          # Broyden Jacobian updates between finite differences
+      spike_threshold_k: 3.0      # isolated temperature jumps treated as missing
+      fixed: []                   # parameters never calibrated on this panel
+
+Errors name the key path (``calibration.window_h``). References: the paper's Eq. 3; MHE
+arrival cost: Rao, Rawlings & Mayne (2003); soft-L1 loss: Triggs et al. (2000) and the
+``scipy.optimize.least_squares`` documentation.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+from dsfd.config.loader import Problem, setting
+
+#: Calibrated parameters in the order of the model (copy of panel.PARAMETER_NAMES, kept
+#: here so this module does not import the panel module that imports it).
+_NAMES = ("h_out", "h_ca1", "h_ca2", "h_ca3", "h_ca4", "h_in", "f", "c", "n",
+          "q_x1", "q_x2", "q_x3", "q_x4")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Calibration:
+    """On-line self-calibration and the off-line batch fit (dsfd.estimation)."""
+
+    window_h: float = setting(
+        4.0, doc="Length of the moving window of Eq. 3", unit="h", gt=0.25, le=48)
+    forgetting_factor: float = setting(
+        0.7, doc="λ of Eq. 3 per hour of age: a residual t hours old is weighted λ^t",
+        unit="1/h", gt=0, le=1)
+    horizon_steps: int = setting(
+        15, doc="Lead times 1..N of the multi-step prediction residual (the controller's "
+        "horizon)", ge=1, le=120)
+    start_stride_steps: int = setting(
+        4, doc="A prediction rollout starts from the observed state every N-th step",
+        ge=1, le=120)
+    update_interval_s: float = setting(
+        600.0, doc="Time between on-line updates", unit="s", ge=0, le=86400)
+    min_window_h: float = setting(
+        1.0, doc="Data needed before the first on-line update", unit="h", gt=0, le=48)
+    max_nfev: int = setting(
+        8, doc="Residual evaluations (least-squares iterations) per on-line update", ge=1,
+        le=500)
+    broyden_updates: int = setting(
+        1, doc="On-line: Broyden rank-one Jacobian updates between finite-difference "
+        "Jacobians (0 = finite differences at every iteration)", ge=0, le=20)
+    offline_max_nfev: int = setting(
+        40, doc="Residual evaluations of the off-line batch fit", ge=1, le=5000)
+    loss: Literal["linear", "soft_l1", "huber", "cauchy", "arctan"] = setting(
+        "soft_l1", doc="Robust loss ρ of scipy.optimize.least_squares")
+    f_scale: float = setting(
+        1.0, doc="Soft threshold of the loss, in units of the residual scales", gt=0, le=100)
+    temperature_scale_k: float = setting(
+        0.3, doc="Residual scale σ of the temperatures x1..x5", unit="K", gt=0, le=10)
+    velocity_scale_ms: float = setting(
+        0.01, doc="Residual scale σ of the cavity speed |v|", unit="m/s", gt=0, le=1)
+    adaptive_scales: bool = setting(
+        True, doc="Re-estimate each output's residual scale from its prediction errors at "
+        "the start of every fit (within ½–3× the scales above)")
+    prior_weight: float = setting(
+        1.0, doc="Weight of the arrival cost (prior) term; 0 switches it off", ge=0, le=1e6)
+    prior_log_sd: float = setting(
+        0.7, doc="Standard deviation of log θ around the panel defaults (first prior)",
+        gt=0, le=5)
+    prior_sd_n: float = setting(
+        0.15, doc="Standard deviation of the exponent n around its default (first prior)",
+        gt=0, le=1)
+    drift_log_sd_per_h: float = setting(
+        0.05, doc="Random-walk growth of the prior spread of log θ per √hour, so the "
+        "estimate can follow slow changes of the panel", unit="1/sqrt(h)", ge=0, le=5)
+    heat_offsets: bool = setting(
+        True, doc="Also fit a constant heat-flux offset on each measured glass/louver node "
+        "(unmodelled sky, irradiance and sensor effects; offset-free estimation)")
+    offset_sd_wm2: float = setting(
+        20.0, doc="Prior spread of the heat-flux offsets", unit="W/m2", gt=0, le=1000)
+    offset_bound_wm2: float = setting(
+        200.0, doc="Bound on the magnitude of each heat-flux offset", unit="W/m2", gt=0,
+        le=2000)
+    offset_drift_wm2_per_h: float = setting(
+        20.0, doc="Random-walk growth of the prior spread of the offsets per √hour",
+        unit="W/m2/sqrt(h)", ge=0, le=1000)
+    offset_tracking_s: float = setting(
+        600.0, doc="Between window fits the offsets follow each new measurement with this time "
+        "constant (recursive input-disturbance update); 0 switches it off", unit="s", ge=0,
+        le=86400)
+    innovation_smoothing_s: float = setting(
+        300.0, doc="Time constant of the low-pass on the innovations the offsets follow "
+        "(white sensor noise averages out, persistent model errors pass)", unit="s", ge=0,
+        le=86400)
+    spike_threshold_k: float = setting(
+        3.0, doc="A temperature sample that jumps by more than this from both neighbours "
+        "(which agree) is treated as missing", unit="K", gt=0, le=100)
+    fixed: tuple[str, ...] = setting(
+        (), doc="Parameters held at their defaults on this panel (in addition to those the "
+        "panel cannot excite)")
+
+    def check(self) -> list[Problem]:
+        out = []
+        for name in self.fixed:
+            if name not in _NAMES:
+                out.append(Problem("fixed", name, f"unknown parameter; known: {', '.join(_NAMES)}"))
+        if self.min_window_h > self.window_h:
+            out.append(Problem("min_window_h", self.min_window_h,
+                               f"longer than window_h {self.window_h} h"))
+        return out

@@ -1,0 +1,255 @@
+"""One bounded, robust, prior-regularised least-squares fit of θ on a window (Eq. 3).
+
+Minimises, over the free parameters φ_F (log θ; n linear) within the bounds,
+
+    ½ Σ_j c² ρ(e_j(θ)²/c²)  +  ½ w (φ_F − φ̄_F)ᵀ P̄_F⁻¹ (φ_F − φ̄_F)
+
+with e the weighted multi-step residuals of :mod:`dsfd.estimation.objective`, ρ a robust
+loss with soft threshold c (``f_scale``), and the arrival cost of moving-horizon
+estimation (Rao, Rawlings & Mayne 2003): the previous estimate φ̄ with covariance P̄
+summarises the data before the window, so parameters the window does not excite stay put.
+
+Notes
+-----
+* Robust loss: the data residuals are replaced by r̃ = c·sgn(e)·√ρ(e²/c²), so that
+  Σ r̃² is the robust cost, with Jacobian scaled by dr̃/de = ρ'·|e|/(c√ρ) (the "square-root
+  robustification" of Triggs et al. 2000, §4.3); the prior rows stay quadratic. ρ as in
+  ``scipy.optimize.least_squares``: soft_l1 2(√(1+z) − 1), huber, cauchy ln(1+z),
+  arctan(z). One wrong sample therefore pulls with a bounded force.
+* Jacobian: forward differences in φ, all perturbed θ as extra batch rows of ONE model
+  rollout (:meth:`WindowProblem.predict`); backward at an upper bound.
+* Covariance: P = (J̃ᵀJ̃ / (s² m_r) + w P̄⁻¹)⁻¹ with s = 1.4826·median|r̃| (robust
+  residual scale) and m_r the mean number of lead times per rollout — the residuals of one
+  rollout share its start-state and model-form error, so a rollout is counted as about one
+  independent observation (a conservative effective-sample-size correction).
+* ``least_squares`` (trust-region reflective, bounds, LSMR sub-problem) with ``max_nfev``
+  residual evaluations; each accepted step costs one more batched rollout for the
+  Jacobian, or, with ``broyden`` > 0, a Broyden rank-one update of the previous one
+  (Broyden 1965; Dennis & Schnabel 1996, §8.1) between finite-difference refreshes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.linalg import solve_triangular
+from scipy.optimize import least_squares
+
+from dsfd.estimation.objective import WindowProblem
+from dsfd.estimation.params import N_PARAMS, ParameterSpace
+
+#: Forward-difference steps in φ: 1 % of θ for log coordinates, 0.01 for n, 1 W/m2 for
+#: the offsets — output changes of ~0.01 K, a hundred times the coupling tolerance of
+#: the fit's rollouts (dsfd.estimation.objective.COUPLING_TOL_K).
+FD_STEP_LOG, FD_STEP_N, FD_STEP_OFFSET_WM2 = 1e-2, 1e-2, 1.0
+
+
+def robust_rho(z: np.ndarray, loss: str) -> tuple[np.ndarray, np.ndarray]:
+    """ρ(z) and ρ'(z) of the scipy losses (z = (e/c)²)."""
+    if loss == "linear":
+        return z, np.ones_like(z)
+    if loss == "soft_l1":
+        t = np.sqrt(1.0 + z)
+        return 2.0 * (t - 1.0), 1.0 / t
+    if loss == "huber":
+        big = z > 1.0
+        rz = np.sqrt(np.where(big, z, 1.0))
+        return np.where(big, 2.0 * rz - 1.0, z), np.where(big, 1.0 / rz, 1.0)
+    if loss == "cauchy":
+        return np.log1p(z), 1.0 / (1.0 + z)
+    if loss == "arctan":
+        return np.arctan(z), 1.0 / (1.0 + z * z)
+    raise ValueError(f"unknown loss {loss!r}")
+
+
+def robustify(e: np.ndarray, loss: str, scale: float) -> tuple[np.ndarray, np.ndarray]:
+    """r̃ = c sgn(e) √ρ(e²/c²) and dr̃/de (shape of ``e``)."""
+    z = (e / scale) ** 2
+    rho, drho = robust_rho(z, loss)
+    root = np.sqrt(np.clip(rho, 0.0, None))
+    r = scale * np.sign(e) * root
+    small = z < 1e-12
+    slope = np.where(small, 1.0, drho * np.abs(e) / (scale * np.where(small, 1.0, root)))
+    return r, slope
+
+
+@dataclass(frozen=True, eq=False)
+class FitResult:
+    """Outcome of :func:`fit_window`.
+
+    Attributes
+    ----------
+    theta : ndarray (9,)
+        Estimate (held parameters at the prior mean).
+    cov_phi : ndarray (9, 9)
+        Posterior covariance in φ for the free block, the prior elsewhere.
+    free : ndarray (9,), bool
+    cost : float
+        Final robust cost (data + prior).
+    cost_start : float
+        Cost at the prior mean.
+    nfev, njev : int
+        Residual and Jacobian evaluations.
+    n_residuals : int
+    success : bool
+    message : str
+    """
+
+    theta: np.ndarray
+    cov_phi: np.ndarray
+    free: np.ndarray
+    cost: float
+    cost_start: float
+    nfev: int
+    njev: int
+    n_residuals: int
+    success: bool
+    message: str
+
+
+def _prior_rows(cov_free: np.ndarray, weight: float) -> np.ndarray:
+    """A with AᵀA = w P̄⁻¹ (A = √w C⁻¹, P̄ = C Cᵀ)."""
+    p = cov_free.shape[0]
+    if weight <= 0.0 or p == 0:
+        return np.zeros((0, p))
+    chol = np.linalg.cholesky(cov_free + 1e-12 * np.eye(p))
+    return np.sqrt(weight) * solve_triangular(chol, np.eye(p), lower=True)
+
+
+def fit_window(problem: WindowProblem, space: ParameterSpace, *, prior_phi: np.ndarray,
+               prior_cov: np.ndarray, free: np.ndarray, loss: str, f_scale: float,
+               prior_weight: float, max_nfev: int, broyden: int = 0,
+               adaptive_scales: bool = False,
+               progress: Callable[[int, int, float], None] | None = None) -> FitResult:
+    """Fit the free parameters of θ on one window.
+
+    Parameters
+    ----------
+    problem : WindowProblem
+    space : ParameterSpace
+    prior_phi : array (9,)
+        Arrival-cost mean φ̄ (also the start point and the value of held parameters).
+    prior_cov : array (9, 9)
+        Arrival-cost covariance P̄ in φ.
+    free : array (9,), bool
+        Parameters the fit may move.
+    loss, f_scale : str, float
+        Robust loss ρ and its soft threshold c (in residual scales).
+    prior_weight : float
+        w of the arrival cost.
+    max_nfev : int
+        Residual evaluations allowed.
+    broyden : int
+        Broyden rank-one updates between finite-difference Jacobians (0: always finite
+        differences).
+    adaptive_scales : bool
+        Re-estimate each output's residual scale at the start point
+        (:meth:`WindowProblem.rescaled`) before fitting.
+    progress : callable (nfev, max_nfev, cost), optional
+        Called after every residual evaluation.
+
+    Returns
+    -------
+    FitResult
+    """
+    free = np.asarray(free, bool)
+    idx = np.flatnonzero(free)
+    prior_phi = np.asarray(prior_phi, float)
+    lo, hi = space.phi_lower[idx], space.phi_upper[idx]
+    span = hi - lo
+    x0 = np.clip(prior_phi[idx], lo + 1e-6 * span, hi - 1e-6 * span)
+    a_prior = _prior_rows(prior_cov[np.ix_(idx, idx)], prior_weight)
+    fd = np.where(space.is_log, FD_STEP_LOG, np.where(np.arange(space.is_log.size) >= N_PARAMS,
+                                                      FD_STEP_OFFSET_WM2, FD_STEP_N))[idx]
+    mean_f = prior_phi[idx]
+
+    def theta_of(x: np.ndarray) -> np.ndarray:
+        phi = prior_phi.copy()
+        phi[idx] = x
+        return space.to_theta(phi)
+
+    if adaptive_scales and problem.n_residuals:
+        problem = problem.rescaled(problem.predict(theta_of(x0)[None])[0])
+
+    cache: dict[str, np.ndarray] = {}
+    calls = [0]
+    m = problem.n_residuals
+
+    def fun(x: np.ndarray) -> np.ndarray:
+        if "x" in cache and np.array_equal(cache["x"], x):
+            return cache["out"]
+        e = problem.residuals(theta_of(x))
+        r, slope = robustify(e, loss, f_scale)
+        out = np.concatenate([r, a_prior @ (x - mean_f)])
+        cache.update(x=x.copy(), e=e, slope=slope, out=out)
+        calls[0] += 1
+        if progress is not None:
+            progress(calls[0], max_nfev, 0.5 * float(out @ out))
+        return out
+
+    jac_state: dict[str, object] = {"since_fd": broyden}
+
+    def jac(x: np.ndarray) -> np.ndarray:
+        out = fun(x)
+        prev = jac_state.get("j")
+        if prev is not None and jac_state["since_fd"] < broyden:
+            # Broyden rank-one update of the data block (robustified residuals)
+            step_x = x - jac_state["x"]
+            ss = float(step_x @ step_x)
+            if ss > 0.0:
+                j_data = prev + np.outer(out[:m] - jac_state["r"] - prev @ step_x, step_x) / ss
+                jac_state.update(j=j_data, x=x.copy(), r=out[:m].copy(),
+                                 since_fd=jac_state["since_fd"] + 1)
+                return np.vstack([j_data, a_prior])
+        e, slope = cache["e"], cache["slope"]
+        step = np.where(x + fd <= hi, fd, -fd)
+        rows = []
+        for j in range(len(idx)):
+            xj = x.copy()
+            xj[j] += step[j]
+            rows.append(theta_of(xj))
+        pert = problem.residuals_of(problem.predict(np.array(rows)))
+        j_data = ((pert - e[None, :]) / step[:, None]).T * slope[:, None]
+        jac_state.update(j=j_data, x=x.copy(), r=out[:m].copy(), since_fd=0)
+        return np.vstack([j_data, a_prior])
+
+    if idx.size == 0 or problem.n_residuals == 0:
+        r0 = fun(x0) if idx.size else np.zeros(0)
+        c0 = 0.5 * float(r0 @ r0)
+        return FitResult(theta=space.to_theta(prior_phi), cov_phi=np.array(prior_cov),
+                         free=free, cost=c0, cost_start=c0, nfev=calls[0], njev=0,
+                         n_residuals=problem.n_residuals, success=True,
+                         message="nothing to fit")
+    r0 = fun(x0)
+    cost0 = 0.5 * float(r0 @ r0)
+    res = least_squares(fun, x0, jac=jac, bounds=(lo, hi), method="trf", loss="linear",
+                        x_scale=space.prior_sd[idx], max_nfev=max_nfev, ftol=1e-5,
+                        xtol=1e-5, gtol=1e-8, tr_solver="lsmr")
+    x = res.x if res.cost <= cost0 else x0
+    cov = np.array(prior_cov, float)
+    cov[idx, :] = 0.0
+    cov[:, idx] = 0.0
+    cov[np.ix_(idx, idx)] = _posterior(res.jac, res.fun, a_prior, problem)
+    return FitResult(theta=theta_of(x), cov_phi=cov, free=free, cost=float(min(res.cost, cost0)),
+                     cost_start=cost0, nfev=calls[0], njev=int(res.njev or 0),
+                     n_residuals=problem.n_residuals, success=bool(np.all(np.isfinite(x))),
+                     message=str(res.message))
+
+
+def _posterior(jac: np.ndarray, residual: np.ndarray, a_prior: np.ndarray,
+               problem: WindowProblem) -> np.ndarray:
+    """Covariance of the free φ from the final Jacobian and residuals (see module Notes)."""
+    m = problem.n_residuals
+    j_data = np.asarray(jac)[:m]
+    if j_data.shape[1] == 0:
+        return np.zeros((0, 0))
+    scale = max(0.05, 1.4826 * float(np.median(np.abs(residual[:m])))) if m else 1.0
+    lead = problem.mask.any(axis=-1).sum(axis=1)
+    m_r = float(np.mean(lead[lead > 0])) if np.any(lead > 0) else 1.0
+    info = j_data.T @ j_data / (scale * scale * m_r) + a_prior.T @ a_prior
+    vals, vecs = np.linalg.eigh(0.5 * (info + info.T))
+    vals = np.clip(vals, 1e-12 * max(float(vals.max()), 1e-12), None)
+    cov = (vecs / vals) @ vecs.T
+    return 0.5 * (cov + cov.T)

@@ -1,0 +1,1 @@
+"""Edge: files that hold dsfd's own state (calibration state, fitted parameters)."""

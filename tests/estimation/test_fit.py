@@ -1,0 +1,104 @@
+"""The Eq. 3 fit: recovery of known parameters, bounds, robustness to one bad sample."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from dsfd.config.panel import PARAMETER_NAMES
+from dsfd.estimation.calibration import offline_fit
+from dsfd.estimation.params import ParameterSpace
+from dsfd.estimation.stepdata import model_config, step_data
+from dsfd.measured import MeasuredData
+from dsfd.physics.model import LumpedModel
+from tests.estimation.synthetic import lumped_record, true_theta
+
+
+@pytest.fixture(scope="module")
+def record(suwon):
+    """8 h of 2-minute lumped-model data, thermocouple-like noise (σ 0.1 K, 3 mm/s)."""
+    theta = true_theta(suwon)
+    data, _ = lumped_record(suwon, theta, step_s=120.0, hours=8.0, seed=1)
+    return data, theta
+
+
+@pytest.fixture(scope="module")
+def clean_fit(suwon, record):
+    data, _ = record
+    steps = step_data(suwon, data)
+    model = LumpedModel(model_config(suwon, steps.step_s))
+    return offline_fit(model, steps)
+
+
+def test_identifiable_parameters_are_recovered_within_5_percent(suwon, record, clean_fit):
+    _, theta = record
+    state, fit = clean_fit
+    assert fit.free[:9].all()
+    err = np.abs(state.theta[:9] / theta - 1.0)
+    worst = PARAMETER_NAMES[int(np.argmax(err))]
+    assert err.max() < 0.05, f"{worst}: {err.max():.1%}"
+    # the heat-flux offsets stay near zero on data the model can represent
+    assert np.all(np.abs(state.theta[9:]) < 3.0)
+
+
+def test_standard_errors_are_positive_and_small(suwon, clean_fit):
+    state, _ = clean_fit
+    se = state.std_error(ParameterSpace.from_panel(suwon))
+    assert np.all(se[:9] > 0)
+    assert np.all(se[:9] / state.theta[:9] < 0.05)
+
+
+def _with(data: MeasuredData, column: str, row: int, delta: float) -> MeasuredData:
+    cols = {k: v.copy() for k, v in data.columns.items()}
+    cols[column][row] += delta
+    return MeasuredData(data.time_s, cols, data.source)
+
+
+@pytest.mark.parametrize("spike_filter", [True, False], ids=["spike-filter", "robust-loss"])
+def test_one_outlier_moves_no_estimate_by_more_than_its_standard_error(suwon, record,
+                                                                        clean_fit, spike_filter):
+    data, _ = record
+    cfg = suwon
+    if not spike_filter:  # the robust loss alone must hold the fit
+        cfg = dataclasses.replace(suwon, calibration=dataclasses.replace(
+            suwon.calibration, spike_threshold_k=100.0))
+    bad = _with(data, "x2_c", len(data) // 2, 15.0)
+    steps = step_data(cfg, bad)
+    model = LumpedModel(model_config(cfg, steps.step_s))
+    state, _ = offline_fit(model, steps)
+    ref, _ = clean_fit
+    se = ref.std_error(ParameterSpace.from_panel(cfg))
+    moved = np.abs(state.theta - ref.theta)[:9]
+    assert np.all(moved <= se[:9]), dict(zip(PARAMETER_NAMES, np.round(moved / se[:9], 2),
+                                             strict=True))
+
+
+def test_estimates_stay_inside_the_bounds(suwon):
+    """Data made with h_out and f beyond the panel's bounds: the fit stops at the bound."""
+    theta = true_theta(suwon)
+    theta[0] = 60.0  # h_out upper bound 40
+    theta[6] = 3.0   # f lower bound 5
+    data, _ = lumped_record(suwon, theta, step_s=300.0, hours=4.0, seed=2,
+                            regimes=(1, 3, 10))
+    steps = step_data(suwon, data)
+    model = LumpedModel(model_config(suwon, steps.step_s))
+    space = ParameterSpace.from_panel(suwon)
+    state, fit = offline_fit(model, steps, max_nfev=15)
+    assert np.all(state.theta >= space.lower) and np.all(state.theta <= space.upper)
+    assert state.theta[0] == pytest.approx(40.0, rel=0.02)
+    assert not fit.free[7] and not fit.free[8]  # no regime 5-8 in the data: c, n held
+    assert state.theta[7] == space.default[7] and state.theta[8] == space.default[8]
+
+
+def test_the_outlier_matters_without_robust_loss_and_spike_filter(suwon, record, clean_fit):
+    """Control for the test above: with a plain quadratic loss the same sample does move θ."""
+    data, _ = record
+    cfg = dataclasses.replace(suwon, calibration=dataclasses.replace(
+        suwon.calibration, spike_threshold_k=100.0, loss="linear"))
+    steps = step_data(cfg, _with(data, "x2_c", len(data) // 2, 15.0))
+    state, _ = offline_fit(LumpedModel(model_config(cfg, steps.step_s)), steps)
+    ref, _ = clean_fit
+    se = ref.std_error(ParameterSpace.from_panel(cfg))
+    assert np.max(np.abs(state.theta - ref.theta)[:9] / se[:9]) > 1.5

@@ -1,0 +1,115 @@
+"""On-line self-calibration: what moves, what stays put, when it updates, resuming."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from dsfd.config import load_panel
+from dsfd.estimation.calibration import OnlineCalibrator, window_start
+from dsfd.estimation.observer import fill_state, observe, spike_mask
+from dsfd.estimation.params import FIT_NAMES, ParameterSpace
+from dsfd.estimation.state import state_from_dict
+from dsfd.estimation.stepdata import model_config, step_data
+from dsfd.physics.model import LumpedModel
+from tests.conftest import PANELS
+from tests.estimation.synthetic import lumped_record, true_theta
+
+
+def _setup(cfg, **record):
+    theta = true_theta(cfg)
+    data, _ = lumped_record(cfg, theta, **record)
+    steps = step_data(cfg, data)
+    model = LumpedModel(model_config(cfg, steps.step_s))
+    track = observe(model, steps, model.default_theta()[None])
+    return model, steps, track, theta
+
+
+def test_window_without_flow_regimes_holds_f_c_n_at_the_prior(suwon):
+    model, steps, track, _ = _setup(suwon, step_s=300.0, hours=4.0, regimes=(10,))
+    cal = OnlineCalibrator(model)
+    before = cal.theta
+    rep = cal.update(steps, track.x_hat[0], track.x_pred[0])
+    assert rep.fit is not None and not rep.skipped
+    names = dict(zip(FIT_NAMES, rep.fit.free, strict=True))
+    assert not names["f"] and not names["c"] and not names["n"]
+    assert names["h_out"] and names["h_ca2"]
+    for k in ("f", "c", "n"):
+        i = FIT_NAMES.index(k)
+        assert cal.theta[i] == before[i]
+    assert cal.theta[0] != before[0]
+    assert cal.state.updates == 1 and cal.state.last_update_s == steps.time_s[-1]
+
+
+def test_panels_fix_what_they_cannot_excite(suwon):
+    no_louver = ParameterSpace.from_panel(load_panel(PANELS / "suwon-south-no-louver.yaml"))
+    assert no_louver.fixed[FIT_NAMES.index("h_ca2")] and no_louver.fixed[FIT_NAMES.index("q_x4")]
+    cube = ParameterSpace.from_panel(load_panel(PANELS / "aalborg-cube.yaml"))
+    fixed = {k for k, f in zip(FIT_NAMES, cube.fixed, strict=True) if f}
+    assert fixed == {"h_ca2", "c", "n", "q_x4"}
+    off = dataclasses.replace(suwon.calibration, heat_offsets=False, fixed=("n",))
+    space = ParameterSpace.from_panel(suwon, off)
+    assert {k for k, f in zip(FIT_NAMES, space.fixed, strict=True) if f} == {
+        "n", "q_x1", "q_x2", "q_x3", "q_x4"}
+
+
+def test_updates_are_due_after_the_minimum_window_and_interval(suwon):
+    model = LumpedModel(suwon)
+    cal = OnlineCalibrator(model)
+    t0 = 1.6409e9
+    assert not cal.due(t0 + 1800.0, t0)          # min_window_h = 1
+    assert cal.due(t0 + 3600.0, t0)
+    cal.state = dataclasses.replace(cal.state, last_update_s=t0 + 3600.0)
+    assert not cal.due(t0 + 3900.0, t0)          # update_interval_s = 600
+    assert cal.due(t0 + 4200.0, t0)
+    time_s = t0 + 60.0 * np.arange(600)
+    assert time_s[window_start(time_s, 599, 4.0)] == time_s[599] - 4 * 3600.0
+
+
+def test_resumed_state_continues_the_calibration(suwon):
+    model, steps, track, theta = _setup(suwon, step_s=300.0, hours=6.0, seed=3)
+    first = steps.window(0, 36)
+    cal = OnlineCalibrator(model)
+    cal.update(first, track.x_hat[0, :37], track.x_pred[0, :37])
+    doc = cal.state.to_dict(cal.space)
+    resumed = OnlineCalibrator(model, state=state_from_dict(doc, space=cal.space,
+                                                            panel_id=suwon.panel.id))
+    assert np.array_equal(resumed.theta, cal.theta)
+    rest = steps.window(24, 72)
+    a = cal.update(rest, track.x_hat[0, 24:], track.x_pred[0, 24:])
+    b = resumed.update(rest, track.x_hat[0, 24:], track.x_pred[0, 24:])
+    assert np.allclose(a.state.theta, b.state.theta)
+    # two windows bring the well-excited conductances close to the truth
+    err = np.abs(b.state.theta[[0, 1, 3]] / theta[[0, 1, 3]] - 1)
+    assert err.max() < 0.1
+
+
+def test_offsets_follow_a_sensor_bias(suwon):
+    model, steps, track, _ = _setup(suwon, step_s=120.0, hours=3.0, seed=4, noise_k=0.05)
+    biased = dataclasses.replace(steps, y_k=steps.y_k + np.array([1.5, 0, 0, 0, 0]))
+    track = observe(model, biased, model.default_theta()[None])
+    cal = OnlineCalibrator(model)
+    cal.update(biased, track.x_hat[0], track.x_pred[0])
+    q1 = cal.theta[FIT_NAMES.index("q_x1")]
+    assert q1 > 5.0  # W/m2: the exterior pane reads warm, so it gets heat
+    for k in range(20, 40):
+        cal.track(biased, k, track.x_hat[0, k], biased.y_k[k + 1])
+    assert np.isfinite(cal.theta).all()
+    assert np.all(cal.theta >= cal.space.lower) and np.all(cal.theta <= cal.space.upper)
+
+
+def test_observer_fills_gaps_from_the_prediction_and_estimates_x6(suwon):
+    pred = np.array([[280.0, 290.0, 295.0, 300.0, 285.0, 292.0]])
+    y = np.array([281.0, np.nan, 296.0, np.nan, 286.0])
+    x = fill_state(y, pred, has_louver=True)[0]
+    assert x.tolist() == [281.0, 290.0, 296.0, 300.0, 286.0, 292.0]
+    y = np.array([281.0, 291.0, 297.0, np.nan, 286.0])
+    x = fill_state(y, pred, has_louver=False)[0]
+    assert x[5] == pytest.approx(294.0) and x[3] == 286.0  # x6 = (x2+x3)/2; x4 = x5
+
+
+def test_spikes_are_isolated_jumps_only():
+    y = np.array([10.0, 10.1, 18.0, 10.2, 10.3, 14.0, 14.1, 14.0])
+    assert np.flatnonzero(spike_mask(y, 3.0)).tolist() == [2]

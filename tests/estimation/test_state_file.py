@@ -1,0 +1,107 @@
+"""Calibration state and parameters files: round trip, atomic write, validation, fallback."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from dsfd.estimation.params import FIT_NAMES, ParameterSpace
+from dsfd.estimation.state import CalibrationState
+from dsfd.storage.calibration_file import (
+    CalibrationFileError,
+    load_state,
+    load_state_or_prior,
+    read_params,
+    save_state,
+    write_params,
+)
+
+
+@pytest.fixture
+def space(suwon):
+    return ParameterSpace.from_panel(suwon)
+
+
+@pytest.fixture
+def state(space):
+    rng = np.random.default_rng(0)
+    theta = space.default * np.exp(0.1 * rng.standard_normal(space.default.size))
+    theta[9:] = [3.0, -1.5, 0.5, 0.0]
+    a = 0.01 * rng.standard_normal((13, 13))
+    return CalibrationState(panel_id="suwon-south", theta=space.clip(theta),
+                            cov_phi=a @ a.T + 1e-4 * np.eye(13), prior_theta=space.default,
+                            prior_sd_phi=space.prior_sd, last_update_s=1.6409e9, updates=42,
+                            failed_updates=1, residuals_last=5208, cost_last=123.4,
+                            free_last=("h_out", "f"))
+
+
+def test_state_round_trips_through_the_file(tmp_path, space, state):
+    path = tmp_path / "calibration.json"
+    save_state(path, state, space)
+    back = load_state(path, space=space, panel_id="suwon-south")
+    assert np.allclose(back.theta, state.theta, rtol=0, atol=0)
+    assert np.allclose(back.cov_phi, state.cov_phi)
+    assert (back.last_update_s, back.updates, back.failed_updates, back.free_last) == (
+        state.last_update_s, 42, 1, ("h_out", "f"))
+    assert [p.name for p in tmp_path.iterdir()] == ["calibration.json"]  # no temp left
+    doc = json.loads(path.read_text())
+    assert doc["schema_version"] == 1 and list(doc["theta"]) == list(FIT_NAMES)
+    assert set(doc["std_error"]) == set(FIT_NAMES)
+
+
+def test_save_replaces_atomically(tmp_path, space, state):
+    path = tmp_path / "calibration.json"
+    save_state(path, state, space)
+    save_state(path, CalibrationState.initial("suwon-south", space), space)
+    assert load_state(path, space=space, panel_id="suwon-south").updates == 0
+
+
+def test_missing_file_starts_from_the_priors(tmp_path, space):
+    st, msg = load_state_or_prior(tmp_path / "none.json", space=space, panel_id="suwon-south")
+    assert np.array_equal(st.theta, space.default)
+    assert "no calibration state" in msg
+
+
+@pytest.mark.parametrize("corrupt, key", [
+    ("{ not json", "line 1"),
+    ('{"schema": "other"}', "'schema'"),
+    (None, "'theta.h_out'"),
+    (None, "'cov_phi'"),
+    (None, "'panel_id'"),
+])
+def test_corrupt_file_falls_back_to_the_priors_with_a_clear_message(tmp_path, space, state,
+                                                                    corrupt, key):
+    path = tmp_path / "calibration.json"
+    if corrupt is None:
+        doc = state.to_dict(space)
+        if key == "'theta.h_out'":
+            doc["theta"]["h_out"] = 1e6  # outside the bounds
+        elif key == "'cov_phi'":
+            doc["cov_phi"] = [[1.0, 2.0]]
+        else:
+            doc["panel_id"] = "another-panel"
+        corrupt = json.dumps(doc)
+    path.write_text(corrupt)
+    st, msg = load_state_or_prior(path, space=space, panel_id="suwon-south")
+    assert np.array_equal(st.theta, space.default) and st.updates == 0
+    assert "starting from the panel priors" in msg
+    assert str(path) in msg and key in msg
+
+
+def test_parameters_file_round_trip_and_errors(tmp_path, space, state):
+    path = tmp_path / "params.yaml"
+    write_params(path, state, space, provenance={"data": "x.csv"})
+    theta = read_params(path, space=space, panel_id="suwon-south")
+    assert np.allclose(theta, state.theta, rtol=1e-5)
+    text = path.read_text()
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(text.replace("h_in:", "h_inn:", 1))
+    with pytest.raises(CalibrationFileError, match=r"bad\.yaml.*'parameters\.h_inn'"):
+        read_params(bad, space=space)
+    bad.write_text(text.replace("  f: ", "  f: -", 1))
+    with pytest.raises(CalibrationFileError, match=r"bad\.yaml.*'parameters\.f'.*bounds"):
+        read_params(bad, space=space)
+    with pytest.raises(CalibrationFileError, match="'panel_id'"):
+        read_params(path, space=space, panel_id="aalborg-cube")
