@@ -11,9 +11,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
+from dsfd.config.calibration import Calibration
 from dsfd.config.control import Control
+from dsfd.config.daemon import DaemonSettings
 from dsfd.config.devices import Devices
 from dsfd.config.loader import Problem, setting
+from dsfd.config.safety import Safety
 
 PARAMETER_NAMES: tuple[str, ...] = (
     "h_out", "h_ca1", "h_ca2", "h_ca3", "h_ca4", "h_in", "f", "c", "n",
@@ -334,11 +337,21 @@ class PanelConfig:
     daylight: Daylight = setting(default_factory=Daylight, doc="Daylighting proxy")
     model: ModelOptions = setting(default_factory=ModelOptions, doc="Lumped-model options")
     parameters: Parameters = setting(doc="Calibrated parameters: defaults and bounds")
+    calibration: Calibration = setting(
+        default_factory=Calibration, doc="On-line self-calibration and off-line fit settings "
+        "(dsfd.config.calibration)"
+    )
     control: Control = setting(default_factory=Control, doc="Optimal control and baseline")
     devices: Devices | None = setting(
         None, doc="Modbus devices and the weather station the daemon reads and commands; "
         "null for simulation-only panels (dsfd.config.devices)"
     )
+    daemon: DaemonSettings = setting(
+        default_factory=DaemonSettings, doc="Controller daemon: state, cycle, budgets, "
+        "sensor quality checks (dsfd.config.daemon)")
+    safety: Safety = setting(
+        default_factory=Safety, doc="Safety pipeline before every write: safe state, wind, "
+        "limits, louver move interval (dsfd.config.safety)")
 
     def check(self) -> list[Problem]:
         out = []

@@ -1,0 +1,103 @@
+"""``dsfd bench TARGET``: speed (and accuracy) figures of one part of dsfd.
+
+Targets are looked up in :data:`TARGETS` (name → function taking the parsed arguments and
+returning a flat dict of figures with units in the key names). To add a target, write such
+a function and add it to the dict; the common options below are passed to every target.
+A human table is printed; ``--json PATH`` writes the same figures.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+from dsfd.config import ConfigError, load_panel
+
+DEFAULT_PANEL = Path("config/panels/suwon-south.yaml")
+
+
+def _bench_plant(args: argparse.Namespace) -> dict[str, float]:
+    from dsfd.sim.bench_plant import DEFAULT_WEATHER, bench_plant
+
+    cfg = load_panel(args.config)
+    return bench_plant(cfg, days=3.0 if args.days is None else args.days, seed=args.seed,
+                       weather=args.weather or DEFAULT_WEATHER)
+
+
+def _bench_daemon(args: argparse.Namespace) -> dict[str, float]:
+    from dsfd.daemon.bench import DEFAULT_CYCLES, bench_daemon
+
+    cycles = DEFAULT_CYCLES if args.days is None else round(args.days * 1440)
+    return bench_daemon(args.config, cycles=cycles, seed=args.seed, weather=args.weather)
+
+
+def _bench_calibration(args: argparse.Namespace) -> dict[str, float]:
+    from dsfd.sim.bench_calibration import bench_calibration
+
+    return bench_calibration(load_panel(args.config), seed=args.seed)
+
+
+def _bench_model(args: argparse.Namespace) -> dict[str, float]:
+    from dsfd.sim.bench_model import bench_model
+
+    return bench_model(args.config)
+
+
+def _bench_control(args: argparse.Namespace) -> dict[str, float]:
+    from dsfd.sim.bench_control import bench_control
+
+    return bench_control(args.config, cases=args.cases, seed=args.seed)
+
+
+#: Benchmark targets: name → function(args) → flat figures.
+TARGETS: dict[str, Callable[[argparse.Namespace], dict[str, float]]] = {
+    "model": _bench_model,
+    "control": _bench_control,
+    "plant": _bench_plant,
+    "daemon": _bench_daemon,
+    "calibration": _bench_calibration,
+}
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("bench", help="benchmark a part of dsfd",
+                       description="Time one part of dsfd and print its figures (units in "
+                       "the names); --json writes them as a flat JSON object.")
+    p.add_argument("target", choices=sorted(TARGETS), help="what to benchmark")
+    p.add_argument("--config", type=Path, default=DEFAULT_PANEL,
+                   help=f"panel YAML (default {DEFAULT_PANEL})")
+    p.add_argument("--days", type=float, default=None,
+                   help="simulated duration where the target simulates (plant: 3; daemon: "
+                   "10,000 one-minute cycles)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the target's randomness")
+    p.add_argument("--cases", type=int, default=200,
+                   help="control: random decision problems judged against brute force")
+    p.add_argument("--weather", default=None, help="weather file or bundled name")
+    p.add_argument("--json", type=Path, default=None, help="write the figures as JSON")
+    p.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.days is not None and not args.days > 0:
+        print(f"dsfd bench: --days {args.days}: must be positive", file=sys.stderr)
+        return 2
+    try:
+        figures = TARGETS[args.target](args)
+    except ConfigError as exc:
+        print(exc, file=sys.stderr)
+        return 2
+    except (FileNotFoundError, ValueError) as exc:
+        print(f"dsfd bench: {exc}", file=sys.stderr)
+        return 2
+    print(f"dsfd bench {args.target}")
+    width = max(len(k) for k in figures)
+    for key, value in figures.items():
+        print(f"  {key:<{width}}  {value:14.4g}")
+    if args.json:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps({"target": args.target, **figures}, indent=1))
+        print(f"wrote {args.json}")
+    return 0

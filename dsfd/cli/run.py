@@ -1,0 +1,142 @@
+"""``dsfd run``: the controller daemon of one panel (what ``systemd/dsfd@.service`` starts).
+
+Examples::
+
+    dsfd run --config /etc/dsfd/suwon-south.yaml                 # hardware, real time
+    dsfd run --config PANEL --dry-run                             # read and decide, never write
+    dsfd run --config PANEL --dry-run --plant sim --cycles 1440   # a simulated winter day
+
+Exit codes: 0 after the requested cycles or a stop signal, 2 for a bad configuration or bad
+options (reported before any device is touched, naming the key path), 1 if the daemon
+failed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import dataclasses
+import json
+import shutil
+import sys
+from pathlib import Path
+
+from dsfd.config import ConfigError
+
+EXIT_OK, EXIT_FAILURE, EXIT_USAGE = 0, 1, 2
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "run", help="run the controller daemon of one panel",
+        description="Read sensors, calibrate, optimise and command one panel every cycle. "
+        "Under systemd: Type=notify with watchdog pings, JSON logs on stdout, SIGTERM stops "
+        "after the current cycle, SIGHUP reloads the configuration.")
+    p.add_argument("--config", required=True, type=Path, metavar="PANEL",
+                   help="panel YAML (validated before anything is opened)")
+    p.add_argument("--dry-run", action="store_true",
+                   help="read and decide but never write to actuators (with --plant sim the "
+                   "simulated plant still follows the decisions in-process)")
+    p.add_argument("--plant", choices=["sim"], default=None,
+                   help="sim: the simulated truth plant on replayed real weather instead of "
+                   "the configured devices")
+    p.add_argument("--plant-fidelity", choices=["full", "lumped"], default="full",
+                   help="with --plant sim: full = the stratified truth plant; lumped = the "
+                   "same plant with the lumped model's switches (fast)")
+    p.add_argument("--speed", type=float, default=None, metavar="X",
+                   help="simulated clock at X times real time (default with --plant sim: as "
+                   "fast as possible; without --plant: the real clock)")
+    p.add_argument("--cycles", type=int, default=None, metavar="N",
+                   help="stop after N cycles (default: run until stopped; with --plant sim "
+                   "until the weather record ends)")
+    p.add_argument("--state-dir", type=Path, default=None, metavar="DIR",
+                   help="database and calibration state (default daemon.state_directory, "
+                   "else $STATE_DIRECTORY; a temporary directory for --plant sim)")
+    p.add_argument("--weather", default=None, metavar="NAME|FILE",
+                   help="weather of the simulated plant (default rmis-golden-2022-01)")
+    p.add_argument("--start", default=None, metavar="ISO",
+                   help="UTC start of the simulated clock, e.g. 2022-01-01T15:00:00Z")
+    p.add_argument("--seed", type=int, default=1, help="seed of the simulated plant")
+    p.add_argument("--summary-json", type=Path, default=None, metavar="OUT",
+                   help="also write the end-of-run summary as JSON")
+    p.set_defaults(handler=run)
+
+
+def _check_options(args: argparse.Namespace) -> str | None:
+    if args.speed is not None and not args.speed > 0:
+        return f"--speed {args.speed}: must be a positive factor"
+    if args.cycles is not None and args.cycles < 1:
+        return f"--cycles {args.cycles}: must be at least 1"
+    if args.plant != "sim" and (args.weather is not None or args.plant_fidelity != "full"):
+        return "--weather and --plant-fidelity only apply to --plant sim"
+    if args.start is not None and args.plant != "sim" and args.speed is None:
+        return "--start needs a simulated clock (--plant sim or --speed)"
+    return None
+
+
+def run(args: argparse.Namespace) -> int:
+    from dsfd.daemon.logging_setup import configure_logging
+    from dsfd.daemon.runner import RunOptions, load_for_run, resolve_state_dir, serve
+    from dsfd.measured import parse_iso_utc
+
+    problem = _check_options(args)
+    start_s = None
+    if problem is None and args.start is not None:
+        try:
+            start_s = parse_iso_utc(args.start)
+        except ValueError as exc:
+            problem = f"--start {args.start!r}: {exc}"
+    if problem:
+        print(f"dsfd run: {problem}", file=sys.stderr)
+        return EXIT_USAGE
+    opts = RunOptions(config_path=args.config, dry_run=args.dry_run, plant=args.plant,
+                      plant_fidelity=args.plant_fidelity, speed=args.speed, cycles=args.cycles,
+                      state_dir=args.state_dir, weather=args.weather, start_s=start_s,
+                      seed=args.seed)
+    try:
+        cfg = load_for_run(args.config, simulated_plant=opts.simulated_plant,
+                           dry_run=opts.dry_run)
+        state_dir, temporary = resolve_state_dir(opts, cfg)
+    except ConfigError as exc:
+        print(f"dsfd run: {args.config}: configuration rejected, nothing was started",
+              file=sys.stderr)
+        for issue in exc.issues:
+            print(f"  {issue}", file=sys.stderr)
+        return EXIT_USAGE
+    if opts.simulated_plant:
+        from dsfd.daemon.sim_plant import DEFAULT_WEATHER, cycles_covered, weather_window
+
+        try:
+            series, start = weather_window(cfg, weather=opts.weather or DEFAULT_WEATHER,
+                                           start_s=start_s)
+        except (FileNotFoundError, ValueError) as exc:
+            print(f"dsfd run: {exc}", file=sys.stderr)
+            return EXIT_USAGE
+        if opts.cycles is None:  # until the weather record ends
+            opts = dataclasses.replace(opts, cycles=cycles_covered(
+                series, start_s=start, period_s=cfg.daemon.cycle_period_s))
+    configure_logging()
+    print(f"dsfd run — panel {cfg.panel.id} ({opts.mode})")
+    if opts.dry_run:
+        print("  DRY RUN: commands are decided but NOTHING IS WRITTEN TO HARDWARE"
+              + ("; the simulated plant follows the decisions in-process"
+                 if opts.simulated_plant else ""))
+    elif opts.simulated_plant:
+        print("  simulated plant: nothing is written to hardware")
+    print(f"  state directory: {state_dir}"
+          + (" (temporary, removed at exit; --state-dir keeps it)" if temporary else ""))
+    try:
+        summary = asyncio.run(serve(opts, cfg, state_dir=state_dir))
+    except OSError as exc:  # e.g. a state directory the service user cannot write
+        print(f"dsfd run: {exc}", file=sys.stderr)
+        return EXIT_FAILURE
+    finally:
+        if temporary:
+            shutil.rmtree(state_dir, ignore_errors=True)
+    for line in summary.lines():
+        print(line)
+    if opts.dry_run:
+        print("  nothing was written to hardware (dry run)")
+    if args.summary_json is not None:
+        args.summary_json.write_text(json.dumps(summary.as_dict(), indent=1))
+    return EXIT_OK

@@ -1,0 +1,123 @@
+"""The daemon's state estimate x̂ = (x1..x6) for the optimiser, one cycle at a time.
+
+Each cycle the lumped model predicts the state from the previous estimate over the step
+that just ended (the actuator position that was applied, that step's weather, the current
+θ̂); then :func:`dsfd.estimation.observer.fill_state` replaces the prediction by the GOOD
+measurements of x1..x5 and sets x6 = (x2 + x3)/2 (errata E19.1). A state whose sensor is
+flagged is carried by the prediction — for at most ``daemon.max_predicted_cycles`` cycles,
+after which the estimate is not *usable*: the optimiser then does not run and the baseline
+(or the safe state) decides.
+
+No previous estimate (first cycle, a skipped slot, missing weather) means no prediction:
+only measured states are known then, and the estimate is usable only if all of x1..x5 are
+measured (a panel without a louver has x4 tied to x5).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from dsfd.drivers.base import Command
+from dsfd.estimation.observer import fill_state
+from dsfd.estimation.params import with_offsets
+from dsfd.physics.constants import T_ZERO
+from dsfd.physics.coupling import StepInputs
+from dsfd.physics.model import LumpedModel
+
+__all__ = ["STATE_SIGNALS", "StateEstimate", "StateObserver"]
+
+#: Sensors of x1..x5, in state order.
+STATE_SIGNALS: tuple[str, ...] = ("x1_c", "x2_c", "x3_c", "x4_c", "x5_c")
+_NEVER = 10**9  # age of a state never measured
+
+
+@dataclass(frozen=True)
+class StateEstimate:
+    """The estimate after this cycle's measurement update.
+
+    Attributes
+    ----------
+    x_k : ndarray (6,), [K]
+        x1..x6; NaN where nothing is known.
+    age_cycles : tuple of int
+        Per x1..x5: cycles since the sensor was last GOOD (0 = measured now).
+    usable : bool
+        Every x1..x5 measured or predicted within the allowed age: the optimiser may run.
+    why : str
+        Why not usable ("" if usable).
+    """
+
+    x_k: np.ndarray
+    age_cycles: tuple[int, ...]
+    usable: bool
+    why: str = ""
+
+    def celsius(self, i: int) -> float | None:
+        """State ``x{i+1}`` in degC, None if unknown."""
+        v = float(self.x_k[i])
+        return None if not np.isfinite(v) else v - T_ZERO
+
+
+class StateObserver:
+    """Predict–correct state estimate for one panel (model and θ̂ supplied per cycle)."""
+
+    def __init__(self, model: LumpedModel, *, max_predicted_cycles: int) -> None:
+        self.model = model
+        self.max_predicted_cycles = max_predicted_cycles
+        self.has_louver = model.cfg.louver is not None
+        self._x: np.ndarray | None = None
+        self._age = np.full(5, _NEVER)
+
+    def reset(self) -> None:
+        """Forget the previous estimate (after a gap in the cycles)."""
+        self._x = None
+
+    def update(self, y_c: dict[str, float], *, step: StepInputs | None,
+               applied: Command | None, theta: np.ndarray,
+               offsets: np.ndarray | None = None) -> StateEstimate:
+        """Measurement update with GOOD readings ``y_c`` [degC] of x1..x5.
+
+        Parameters
+        ----------
+        y_c : mapping
+            GOOD sensor values by signal name; absent ones are unknown.
+        step : StepInputs or None
+            Inputs of the step that just ended (None: no prediction possible).
+        applied : Command or None
+            Actuator position during that step.
+        theta : ndarray (9,)
+            Current parameter estimate.
+        offsets : ndarray (4,), optional, [W/m2]
+            Calibrated heat-flux offsets of nodes 1-4 (the calibrator's disturbance model).
+        """
+        y = np.array([y_c.get(n, np.nan) for n in STATE_SIGNALS], float) + T_ZERO
+        measured = np.isfinite(y)
+        x_pred = np.full(6, np.nan)
+        if self._x is not None and step is not None and applied is not None:
+            if offsets is not None:
+                step = with_offsets(step, offsets)
+            res = self.model.step(self._x[None], [applied.afr], applied.or_pct / 100.0, step,
+                                  theta)
+            if np.all(np.isfinite(res.x_next)):
+                x_pred = res.x_next[0]
+        x = fill_state(y, x_pred, has_louver=self.has_louver)
+        predicted = np.isfinite(x[:5]) & ~measured
+        self._age = np.where(measured, 0, np.where(predicted, self._age + 1, _NEVER))
+        if not self.has_louver and measured[4]:
+            self._age[3] = 0  # the louver node is tied to the measured cavity air
+        too_old = [STATE_SIGNALS[i] for i in range(5)
+                   if self._age[i] > self.max_predicted_cycles]
+        unknown = [STATE_SIGNALS[i] for i in range(5) if not np.isfinite(x[i])]
+        if unknown:
+            why = f"no estimate of {', '.join(unknown)}"
+        elif too_old:
+            why = (f"{', '.join(too_old)} not measured for more than "
+                   f"{self.max_predicted_cycles} cycles")
+        elif not np.isfinite(x[5]):
+            why = "no estimate of x6"
+        else:
+            why = ""
+        self._x = x if np.all(np.isfinite(x)) else None
+        return StateEstimate(x, tuple(int(min(a, _NEVER)) for a in self._age), not why, why)
