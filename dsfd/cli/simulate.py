@@ -1,4 +1,5 @@
-"""``dsfd simulate``: open-loop runs of the lumped model or the stratified truth plant."""
+"""``dsfd simulate``: open-loop runs of the lumped model or the stratified truth plant, and
+closed-loop runs of a controller against the truth plant (:mod:`dsfd.cli.closed_loop`)."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ import json
 import sys
 from pathlib import Path
 
+from dsfd.cli import closed_loop
 from dsfd.config import ConfigError, load_panel
 from dsfd.measured import iso_utc
 from dsfd.sim.replay import load_weather
@@ -37,6 +39,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="truth plant: write the measured-data CSV (sensors, controls, "
                    "weather, truth_* columns)")
     p.add_argument("--json", type=Path, default=None, help="write figures and series as JSON")
+    closed_loop.add_arguments(p)
     p.set_defaults(handler=run)
 
 
@@ -55,7 +58,7 @@ def _check(args: argparse.Namespace) -> str | None:
             return f"--{name} {value}: must be positive"
     if args.csv is not None and args.plant != "truth":
         return "--csv needs --plant truth"
-    return None
+    return closed_loop.check(args)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -67,6 +70,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         cfg = load_panel(args.config)
         series = load_weather(args.weather)
+        if args.controller is not None:
+            return closed_loop.run(args, cfg, series, hours)
         if args.plant == "truth":
             return _run_truth(args, cfg, series, hours)
         return _run_lumped(args, cfg, series, hours)

@@ -58,7 +58,7 @@ from dsfd.drivers.base import (
     command_from_values,
 )
 from dsfd.physics.constants import T_ZERO
-from dsfd.physics.forcing import FacadeOptics, step_inputs
+from dsfd.physics.forcing import FacadeOptics, Forcing, WeatherInputs, step_inputs
 from dsfd.physics.model import LumpedModel
 
 __all__ = ["Controller", "CycleOutcome", "OffLoopJob"]
@@ -304,8 +304,7 @@ class Controller:
                 fallback = f"state estimate not usable: {estimate.why}"
             else:
                 problem = ControlProblem(
-                    x0=estimate.x_k, forcing=forecast_forcing(self.cfg, weather.inputs,
-                                                              start_s=now_s),
+                    x0=estimate.x_k, forcing=self._forecast(weather.inputs, now_s),
                     theta=self.calibration.theta, heating=heating,
                     previous_phi_deg=None if current is None else current.phi_deg,
                     previous_afr=None if current is None else current.afr,
@@ -326,6 +325,11 @@ class Controller:
         if fallback:
             log.info("fallback to the baseline: %s", fallback)
         return decision, "rule", fallback, ""
+
+    def _forecast(self, measured: WeatherInputs, now_s: float) -> Forcing:
+        """The façade boundary over the horizon from ``now_s``: persistence of the measured
+        interval (a simulation's oracle overrides this with the true weather)."""
+        return forecast_forcing(self.cfg, measured, start_s=now_s)
 
     def _optimiser(self, problem: ControlProblem) -> Callable[[], Decision]:
         if self.cfg.control.optimiser == "paper-sqp":

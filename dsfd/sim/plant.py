@@ -38,7 +38,7 @@ from dsfd.sim.plant_config import PlantOptions, TrueParameters, drift_factors
 from dsfd.sim.plant_flow import NETWORK, PAIR, FlowPiece, reg_coefficients
 from dsfd.sim.plant_forcing import ForcingTables, weather_at
 from dsfd.sim.plant_init import initial_state
-from dsfd.sim.plant_model import N_ACC, Piece, PlantModel
+from dsfd.sim.plant_model import N_ACC, ROOM_FLOWS, Piece, PlantModel
 from dsfd.sim.replay import at_site, weather_inputs
 from dsfd.sim.sensors import SensorBank, SensorConfig
 from dsfd.sim.truth_state import TrueState, true_state
@@ -314,6 +314,17 @@ class Plant:
         return weather_inputs(self.series, self.cfg, start_s=self.time_s, n_steps=n_steps,
                               t_in_c=self.room_c(mid))
 
+    def room_heat_j(self) -> dict[str, float]:
+        """Heat into the room since the reset [J]: ``q_cv_rd`` (convection and long-wave
+        from the inner pane), ``q_sol_trans`` (transmitted solar), ``q_air`` (errata E2 with
+        the panel's ``model.q_air_basis``) and ``q_da`` (daylighting benefit, physics §12.4).
+
+        The integrals run inside the plant's ODE, so they are exact for the plant, not
+        sampled; the difference of two calls is the heat of the interval between them.
+        """
+        nn = self.model.nn
+        return {k: float(v) for k, v in zip(ROOM_FLOWS, self._y[nn + 4:nn + 8], strict=True)}
+
     def energy_balance(self) -> dict[str, float]:
         """Energy accounting since the reset (errata E18) [J].
 
@@ -324,6 +335,6 @@ class Plant:
         """
         nn = self.model.nn
         stored = self.model.stored_energy(self._y[:nn]) - self._u0
-        solar, bnd, enth, bnd_abs = (float(v) for v in self._y[nn:])
+        solar, bnd, enth, bnd_abs = (float(v) for v in self._y[nn:nn + 4])
         return {"stored_j": stored, "solar_j": solar, "boundary_j": bnd, "enthalpy_j": enth,
                 "residual_j": stored - (solar + bnd + enth), "scale_j": max(solar, bnd_abs)}

@@ -66,8 +66,10 @@ class StepTable(NamedTuple):
     ----------
     a, b : (n, 8)
         :data:`FIELDS` at the start and end of each step (SI, K).
-    src_a, src_b : (n, m, 4), [W/m2]
-        Absorbed short-wave per m² façade in L1, L2, L3, louver (node order, E3).
+    src_a, src_b : (n, m, 6), [W/m2]
+        Absorbed short-wave per m² façade in L1, L2, L3, louver (node order, E3), then the
+        solar power transmitted into the room and the daylighting benefit Q_DA (physics
+        §12.2, §12.4), both per m² façade (:data:`ROOM_COLUMNS`).
     windward : (n,) bool
     poa_wm2 : (n,), [W/m2]
         Façade-plane global irradiance at the step midpoint (for reports).
@@ -81,9 +83,13 @@ class StepTable(NamedTuple):
     poa_wm2: np.ndarray
 
 
+#: Columns of the source tables after the four absorbed ones: transmitted solar, Q_DA/A_f.
+ROOM_COLUMNS = ("q_trans", "q_da")
+
+
 class _Knots(NamedTuple):
     scalars: np.ndarray  # (n, 8)
-    sources: np.ndarray  # (n, m, 4)
+    sources: np.ndarray  # (n, m, 6): absorbed in the 4 layers, transmitted, Q_DA per m²
     windward: np.ndarray
     poa: np.ndarray
 
@@ -171,11 +177,14 @@ def _windward(cfg: PanelConfig, w: WeatherInputs) -> np.ndarray:
 def _knots_lumped(cfg: PanelConfig, options: PlantOptions, w: WeatherInputs,
                   phis_rad: np.ndarray) -> _Knots:
     f = facade_forcing(cfg, w)
-    loads = FacadeOptics(cfg).loads(f, phis_rad)  # sources (m, n, 4)
+    optics = FacadeOptics(cfg)
+    loads = optics.loads(f, phis_rad)  # sources (m, n, 4)
     t_rad = f.t_rad_out_k if options.sky_model == "lumped" else _sky(cfg, options, w)
     scalars = np.stack([f.t_out_k, f.t_in_k, f.t_mrt_k, t_rad, f.p_atm_pa, f.wind_ms,
                         f.cp_bottom, f.cp_top], axis=-1)
-    return _Knots(scalars, np.moveaxis(loads.sources, 0, 1), _windward(cfg, w),
+    sources = np.concatenate([loads.sources, loads.q_trans_wm2[..., None],
+                              loads.q_da_w[..., None] / optics.area], axis=-1)
+    return _Knots(scalars, np.moveaxis(sources, 0, 1), _windward(cfg, w),
                   f.beam_wm2 + f.diffuse_wm2)
 
 
@@ -208,8 +217,11 @@ def _knots_fine(cfg: PanelConfig, options: PlantOptions, w: WeatherInputs,
                            louver=NO_LOUVER if louver is None else louver,
                            diffuse_ground=ground)
     m, n = phis_rad.size, fi.beam.size
-    sources = np.stack([np.broadcast_to(s, (m, n)) for s in (sol.s1, sol.s2, sol.s3, sol.s4)],
-                       axis=-1)
+    # Q_DA is a lighting proxy (physics §12.4 [ENG]): the lumped visible optics serve it.
+    optics = FacadeOptics(cfg)
+    q_da = optics.loads(facade_forcing(cfg, w), phis_rad).q_da_w / optics.area
+    sources = np.stack([np.broadcast_to(s, (m, n)) for s in (sol.s1, sol.s2, sol.s3, sol.s4,
+                                                             sol.transmitted, q_da)], axis=-1)
     geom = AirflowGeometry.from_panel(cfg)
     cp_b, cp_t = geom.wind_pressure_coefficients(w.wind_dir_deg, fac.azimuth_deg)
     wind = local_wind_speed(w.wind_speed_ms, terrain=site.terrain,

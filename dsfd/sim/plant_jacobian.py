@@ -67,6 +67,8 @@ def jacobian(model: PlantModel, t: float, y: np.ndarray) -> np.ndarray | csc_mat
     jac[nn + 1, :nn] = d_bnd
     jac[nn + 2, :nn] = d_adv
     jac[nn + 3, :nn] = np.sign(last["bnd_total"]) * d_bnd
+    n = model.lay.n
+    jac[nn + 4, :nn] = np.bincount(lk.bnd_r[2 * n:], gb[2 * n:], minlength=nn)  # Q_cv,rd
     # Sparse above a few dozen states: Radau then factorises with SuperLU, which is
     # faster than dense LAPACK there and immune to BLAS thread oversubscription.
     return csc_matrix(jac) if model.ny > SPARSE_ABOVE else jac

@@ -1,7 +1,10 @@
 """Right-hand side and Jacobian of the stratified truth plant (physics §15, errata E5–E20).
 
-State y = [T (n_nodes) [K], ∫S dt, ∫Q_bnd dt, ∫(H_in − H_out) dt, ∫|Q_bnd| dt [J]]; the
-four accumulators instrument the energy balance of errata E18. Per node (absolute units)
+State y = [T (n_nodes) [K], ∫S dt, ∫Q_bnd dt, ∫(H_in − H_out) dt, ∫|Q_bnd| dt,
+∫Q_cv,rd dt, ∫Q_sol,trans dt, ∫Q_air dt, ∫Q_DA dt [J]]; the first four accumulators
+instrument the energy balance of errata E18, the last four are the room-side heat flows of
+physics §12 (Q_air by the panel's ``model.q_air_basis``, errata E2, with the temperature of
+the air actually entering the room). Per node (absolute units)
 
     C_i dT_i/dt = Σ_links g (T_j − T_i) + Σ_inflows ṁ c_p (T_up − T_i) + S_i A_seg
 
@@ -31,6 +34,7 @@ from dsfd.sim.plant_convection import ConvectionGeometry, coefficients
 from dsfd.sim.plant_flow import (
     EB,
     IB,
+    IT,
     NETWORK,
     PAIR,
     FlowPiece,
@@ -52,7 +56,9 @@ from dsfd.sim.plant_layout import (
 )
 from dsfd.sim.plant_physics import iso15099_gap, lateral_open_fraction, louver_flow_loss
 
-N_ACC = 4
+N_ACC = 8
+#: Room-side accumulators (after the four of the energy balance), in order.
+ROOM_FLOWS = ("q_cv_rd", "q_sol_trans", "q_air", "q_da")
 
 
 @dataclass
@@ -91,6 +97,7 @@ class PlantModel:
         self.ny = self.nn + N_ACC
         self.cap0, self.vol, self.p_ref = capacities(cfg, lay, geo)
         self.cp = cfg.model.air_heat_capacity_jkgk
+        self.credit = cfg.model.q_air_basis == "ventilation_credit"
         self.air = np.flatnonzero(self.vol > 0)
         self.variable_air = options.air_properties == "variable"
         self.col_nodes, self.col_w = column_weights(lay, geo)
@@ -358,16 +365,38 @@ class PlantModel:
             q += q_corr
             adv_total += float(q_corr.sum())
         src_w = src * area
-        q[:4 * n] += np.repeat(src_w, n)
+        q[:4 * n] += np.repeat(src_w[:4], n)
         cap = self.capacity(T)
         out = np.empty(self.ny)
         out[:nn] = q / cap
         bnd_total = float(f_bnd.sum())
-        out[nn:] = (float(src_w.sum()) * n, bnd_total, adv_total, abs(bnd_total))
+        out[nn:] = (float(src_w[:4].sum()) * n, bnd_total, adv_total, abs(bnd_total),
+                    -float(f_bnd[2 * n:].sum()), float(src_w[4]) * n,
+                    self._q_air(m, fl, face_out, m_cav, t_out, t_in), float(src_w[5]) * n)
         self.last = {"cap": cap, "f_adv": f_adv, "flows": fl, "m_cav": m_cav, "t": t, "te": te,
                      "bnd_total": bnd_total, "face_out": face_out,
                      "p": p, "phi_deg": ctx.act.phi_at(t), "src": src}
         return out
+
+    def _q_air(self, m: list[float], fl: dict, face_out: float | None, m_cav: float,
+               t_out: float, t_in: float) -> float:
+        """Q_air into the room [W] (errata E2) with a = ṁ cavity → room at the temperature of
+        the air leaving through IB/IT, b = ṁ room → cavity."""
+        a = b = a_t = 0.0
+        for k, t_k in ((IB, fl["t_bot"]), (IT, fl["t_top"])):
+            if face_out is not None and (k == IT) == (m_cav > 0):
+                t_k += face_out  # leaves at the reconstructed outlet face (2nd order)
+            if m[k] < 0.0:
+                a -= m[k]
+                a_t -= m[k] * t_k
+            else:
+                b += m[k]
+        if a <= 0.0:
+            return 0.0 if self.credit else self.cp * b * (t_out - t_in)
+        t_sup = a_t / a
+        if self.credit:
+            return self.cp * (min(a, b) * (t_sup - t_in) + max(0.0, a - b) * (t_sup - t_out))
+        return self.cp * (a * (t_sup - t_in) + max(0.0, b - a) * (t_out - t_in))
 
     def _inflow_mix(self, m: list[float], m_cav: float, t_out: float, t_in: float,
                     T: np.ndarray) -> float:

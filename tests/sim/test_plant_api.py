@@ -91,7 +91,8 @@ def test_lumped_optics_zoh_matches_fine_forcing_in_magnitude(suwon, rmis):
                       weather_series=rmis)
         plant.reset(start, command=Command(0.0, 10, 100.0))
         table, row = plant.tables.step(0)
-        out[optics] = table.src_a[row]
+        out[optics] = table.src_a[row][:, :4]  # absorbed; then transmitted and Q_DA
+        assert table.src_a.shape[-1] == 6
     lumped, fine = out["lumped"], out["fine"]
     assert lumped.shape == fine.shape == (11, 4)
     rel = np.abs(fine.sum(axis=1) - lumped.sum(axis=1)) / lumped.sum(axis=1)

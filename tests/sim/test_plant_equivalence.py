@@ -76,3 +76,13 @@ def test_plant_matches_lumped_model_over_a_day(suwon, rmis, clear_day, afr):
         0.01 * np.abs(v_lumped).mean() + 1e-9)
     if afr == 10:
         assert np.all(v == 0.0)
+    # The room-side heat (physics §12) integrated inside the plant equals the lumped
+    # model's step averages summed over the day: Q_sol,trans and Q_DA come from the same
+    # optics, Q_cv,rd and Q_air from states that agree as above.
+    dt = suwon.model.step_s
+    room = plant.room_heat_j()
+    for key, lumped_w in (("q_cv_rd", lumped.q_cv_rd_w), ("q_sol_trans", lumped.q_sol_w),
+                          ("q_air", lumped.q_air_w), ("q_da", lumped.q_da_w)):
+        expected = float(lumped_w[0].sum() * dt)
+        scale = float(np.abs(lumped_w[0]).sum() * dt)
+        assert abs(room[key] - expected) <= 0.01 * scale + 1.0, (key, room[key], expected)

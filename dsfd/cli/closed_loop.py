@@ -1,0 +1,149 @@
+"""``dsfd simulate --plant truth --controller ...``: closed-loop runs and their report.
+
+The options live here so ``dsfd simulate`` stays an open-loop command with one branch to
+this module; :mod:`dsfd.sim.closed_loop` does the work.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from dsfd.config.panel import PanelConfig
+from dsfd.measured import iso_utc, parse_iso_utc
+from dsfd.weather import WeatherSeries
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """The closed-loop options of ``dsfd simulate``."""
+    from dsfd.sim.closed_loop import CALIBRATIONS, CONTROLLERS
+
+    g = p.add_argument_group("closed loop (with --plant truth)")
+    g.add_argument("--controller", choices=CONTROLLERS, default=None,
+                   help="run calibration and control against the truth plant: the optimiser "
+                   "(mpc), the paper's SQP (paper-sqp), the rule-based baseline (rule), one "
+                   "fixed command (fixed: --phi-deg/--afr/--or-pct, default 0 deg, regime 10)"
+                   " or the optimiser with perfect information (oracle)")
+    g.add_argument("--calibration", choices=CALIBRATIONS, default="online",
+                   help="on-line self-calibration (default), frozen --params (offline) or the "
+                   "panel defaults (none)")
+    g.add_argument("--params", type=Path, default=None,
+                   help="parameters file of dsfd calibrate (for --calibration offline)")
+    g.add_argument("--mode", choices=("heating", "cooling", "auto"), default=None,
+                   help="override control.mode of the panel")
+    g.add_argument("--room-c", type=float, default=None,
+                   help="override the room air temperature room.t_in_c [degC]")
+    g.add_argument("--t-out-offset-k", type=float, default=0.0,
+                   help="add this to the measured outdoor air [K]: a synthetic warmer (or "
+                   "colder) period on real irradiance; the report says so")
+    g.add_argument("--start", default=None, help="UTC start, e.g. 2022-01-01T00:00:00Z")
+    g.add_argument("--fidelity", choices=("full", "lumped"), default="full",
+                   help="truth plant switches: full stratified plant (default) or its lumped "
+                   "equivalent with realistic sensors and actuators (fast)")
+
+
+def check(args: argparse.Namespace) -> str | None:
+    """Why the closed-loop options cannot run, or None."""
+    if args.controller is None:
+        closed_only = ("params", "mode", "room_c", "start")
+        used = [n for n in closed_only if getattr(args, n) is not None]
+        if used or args.t_out_offset_k or args.fidelity != "full":
+            return "closed-loop options need --controller"
+        return None
+    if args.plant != "truth":
+        return "--controller needs --plant truth"
+    if args.csv is not None:
+        return "--csv is for open-loop truth runs"
+    if args.calibration == "offline" and args.params is None \
+            and args.controller not in ("fixed", "oracle"):
+        return "--calibration offline needs --params PARAMS.yaml (made by dsfd calibrate)"
+    return None
+
+
+def panel_for_run(cfg: PanelConfig, args: argparse.Namespace) -> PanelConfig:
+    """The panel with the run's overrides of mode and room temperature."""
+    if args.mode is not None:
+        cfg = dataclasses.replace(cfg, control=dataclasses.replace(cfg.control, mode=args.mode))
+    if args.room_c is not None:
+        cfg = dataclasses.replace(cfg, room=dataclasses.replace(cfg.room, t_in_c=args.room_c))
+    return cfg
+
+
+def shifted(series: WeatherSeries, offset_k: float) -> WeatherSeries:
+    """``series`` with the outdoor air shifted by ``offset_k`` [K] (noted in the series)."""
+    if not offset_k:
+        return series
+    note = f"SYNTHETIC: measured outdoor air shifted by {offset_k:+g} K"
+    return dataclasses.replace(series, t_out_c=series.t_out_c + offset_k,
+                               notes=(*series.notes, note))
+
+
+def run(args: argparse.Namespace, cfg: PanelConfig, series: WeatherSeries,
+        hours: float | None) -> int:
+    from dsfd.estimation.params import ParameterSpace
+    from dsfd.sim.actuators import Command
+    from dsfd.sim.closed_loop import DEFAULT_FIXED, ClosedLoopSettings, run_closed_loop
+    from dsfd.sim.plant_config import PlantOptions
+    from dsfd.storage.calibration_file import read_params
+
+    cfg = panel_for_run(cfg, args)
+    series = shifted(series, args.t_out_offset_k)
+    offline = None
+    if args.params is not None:
+        offline = read_params(args.params, space=ParameterSpace.from_panel(cfg),
+                              panel_id=cfg.panel.id)
+    fixed = Command(DEFAULT_FIXED.phi_deg if args.phi_deg is None else args.phi_deg,
+                    DEFAULT_FIXED.afr if args.afr is None else args.afr,
+                    DEFAULT_FIXED.or_pct if args.or_pct is None else args.or_pct)
+    options = (PlantOptions.lumped_equivalent(sensors="realistic", actuators="realistic")
+               if args.fidelity == "lumped" else None)
+    settings = ClosedLoopSettings(
+        controller=args.controller, calibration=args.calibration, seed=args.seed, hours=hours,
+        start_s=None if args.start is None else parse_iso_utc(args.start),
+        offline_theta=offline, fixed_command=fixed, options=options)
+    tty = sys.stderr.isatty()
+
+    def progress(i: int, n: int) -> None:
+        if tty and (i % 60 == 0 or i == n):
+            print(f"\r  {i}/{n} cycles", end="" if i < n else "\n", file=sys.stderr)
+
+    result = run_closed_loop(cfg, series, settings, progress=progress)
+    s = result.summary()
+    end = result.start_s + result.cycles * result.step_s
+    print(f"dsfd simulate — panel {cfg.panel.id}, truth plant (seed {args.seed}), closed loop: "
+          f"controller {args.controller}, calibration {args.calibration}")
+    print(f"weather: {series.source}")
+    for note in series.notes:
+        print(f"  {note}")
+    print(f"period: {iso_utc(result.start_s)} to {iso_utc(end)} ({result.cycles} cycles of "
+          f"{result.step_s:g} s); mode {cfg.control.mode}, heating in "
+          f"{s['heating_fraction']:.0%} of cycles; room {cfg.room.t_in_c:g} degC")
+    print()
+    print("heat into the room [kWh] (physics §12; Q_air by "
+          f"{cfg.model.q_air_basis}):")
+    for key, label in (("q_cv_rd", "Q_cv,rd  inner pane"), ("q_sol_trans", "Q_sol    transmitted"),
+                       ("q_air", "Q_air    cavity air"), ("q_da", "Q_DA     daylight")):
+        print(f"  {label:<24}{s[key + '_kwh']:10.3f}")
+    print(f"  {'J (objective, Eq. 4-5)':<24}{s['J_kwh']:10.3f}")
+    print()
+    print(f"louver moves per day: {s['louver_moves_per_day']:.1f}")
+    print("regime share: " + ", ".join(f"{r}: {v:.0%}" for r, v in s["regime_share"].items()))
+    print("decisions: " + ", ".join(f"{m} {n}" for m, n in s["methods"].items()))
+    if np.isfinite(s["decide_ms_median"]):
+        print(f"decision time: median {s['decide_ms_median']:.1f} ms, "
+              f"p99 {s['decide_ms_p99']:.1f} ms")
+    print(f"calibration updates: {s['calibration_updates']}")
+    print(f"wall time: {s['wall_s']:.1f} s")
+    if args.json:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        doc = {**s, "weather": {"source": series.source, "notes": list(series.notes)},
+               "mode": cfg.control.mode, "room_c": cfg.room.t_in_c,
+               "start_utc": iso_utc(result.start_s)}
+        args.json.write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
+        print(f"wrote {args.json}")
+    return 0
