@@ -8,6 +8,7 @@ fast; the full stratified plant over the four RMIS days is the benchmark of the 
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import subprocess
 import sys
 from pathlib import Path
@@ -48,7 +49,7 @@ def test_commands_lie_on_the_actuator_grid_and_respect_the_move_interval(suwon, 
         assert all(c.phi_deg in grid for c in cmds), name
         assert all(1 <= c.afr <= 10 and 0.0 <= c.or_pct <= 100.0 for c in cmds), name
         moves = [i for i in range(1, len(cmds)) if cmds[i].phi_deg != cmds[i - 1].phi_deg]
-        assert all(b - a >= min_cycles for a, b in zip(moves, moves[1:], strict=False)), moves
+        assert all(b - a >= min_cycles for a, b in itertools.pairwise(moves)), moves
 
 
 def test_fixed_holds_its_command_and_a_closed_cavity_brings_no_air(sunny):
