@@ -31,7 +31,8 @@ def _bench_daemon(args: argparse.Namespace) -> dict[str, float]:
     from dsfd.daemon.bench import DEFAULT_CYCLES, bench_daemon
 
     cycles = DEFAULT_CYCLES if args.days is None else round(args.days * 1440)
-    return bench_daemon(args.config, cycles=cycles, seed=args.seed, weather=args.weather)
+    return bench_daemon(args.config, cycles=cycles, seed=args.seed, weather=args.weather,
+                        progress=True)
 
 
 def _bench_calibration(args: argparse.Namespace) -> dict[str, float]:

@@ -7,7 +7,8 @@ safety pipeline, SQLite store — with the simulated clock running as fast as po
 
 Figures (flat, units in the names):
 
-* ``rss_mb_max`` — largest resident set size sampled during the run;
+* ``rss_mb_start``, ``rss_mb_end``, ``rss_mb_max`` — resident set size at the first and
+  the last sample and the largest sampled during the run (every 50 cycles);
 * ``rss_growth_mb`` — mean RSS over the last 10 % of the cycles minus the mean over the
   second 10 % (after warm-up: imports, caches, the first optimiser and calibration runs).
   A daemon that leaks shows it here; a flat one reads ≈ 0;
@@ -93,6 +94,8 @@ def bench_daemon(config: Path, *, cycles: int = DEFAULT_CYCLES, seed: int = 0,
     late = mb[at > n - tenth]
     return {
         "cycles": float(n),
+        "rss_mb_start": float(mb[0]) if mb.size else float("nan"),
+        "rss_mb_end": float(mb[-1]) if mb.size else float("nan"),
         "rss_mb_max": float(mb.max()) if mb.size else rss_mb(),
         "rss_growth_mb": float(late.mean() - early.mean()) if early.size and late.size
         else float("nan"),

@@ -22,6 +22,7 @@ import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from dsfd import __version__
 from dsfd.config import ConfigError, ConfigIssue, PanelConfig, load_panel
@@ -41,6 +42,9 @@ from dsfd.drivers.base import Driver
 from dsfd.measured import iso_utc
 from dsfd.physics.model import LumpedModel
 from dsfd.signals import ACTUATOR_NAMES
+
+if TYPE_CHECKING:
+    from dsfd.daemon.sim_plant import SimulatedPlant
 
 __all__ = ["RunOptions", "load_for_run", "runtime_problems", "serve"]
 
@@ -205,7 +209,7 @@ class _Daemon:
                  method=out.method, phi_deg=c.phi_deg, afr=c.afr, or_pct=c.or_pct,
                  write=out.write_status, flagged=len(out.quality.flags),
                  fallback=out.fallback or None, wind_override=out.safety.wind_override,
-                 calibration=None if out.calibration is None else (
+                 calibration="not due" if out.calibration is None else (
                      "updated" if out.calibration.updated else out.calibration.skipped),
                  read_ms=t.get("read"), decide_ms=t.get("decide"), cycle_ms=t.get("total"),
                  skipped=out.skipped_slots or None)
@@ -280,6 +284,7 @@ async def serve(opts: RunOptions, cfg: PanelConfig, *, state_dir: Path,
     bind_contextvars(panel=cfg.panel.id)
     notifier = Notifier()
     clock: Clock
+    sim: SimulatedPlant | None = None
     if opts.simulated_plant:
         from dsfd.daemon.sim_plant import DEFAULT_WEATHER, plant_options, simulated_plant
 
@@ -313,6 +318,7 @@ async def serve(opts: RunOptions, cfg: PanelConfig, *, state_dir: Path,
     controller = Controller(cfg, driver=driver, clock=clock, store=store,
                             calibration=calibration, write_enabled=write_enabled)
     daemon = _Daemon(opts, cfg, clock, driver, store, controller, notifier)
+    daemon.summary.start_calibration(calibration)
     loop = asyncio.get_running_loop()
     loop.add_signal_handler(signal.SIGTERM, daemon.stop.set)
     loop.add_signal_handler(signal.SIGINT, daemon.stop.set)
@@ -334,6 +340,9 @@ async def serve(opts: RunOptions, cfg: PanelConfig, *, state_dir: Path,
         finally:
             store.close()
             notifier.close()
+    heat = None if sim is None else sim.plant.room_heat_j()
+    daemon.summary.finish(calibration, room_heat_j=heat, room_heat_h=0.0 if sim is None
+                          else (sim.plant.time_s - sim.start_s) / 3600.0)
     log.info("daemon stopped", reason=reason, cycles=daemon.summary.cycles,
              cycle_failures=daemon.cycle_failures)
     return daemon.summary
