@@ -166,9 +166,9 @@ class RunSummary:
         n = max(self.cycles, 1)
         methods = ", ".join(f"{_METHODS.get(k, k)} {v}" for k, v in self.methods.most_common())
         seasons = ", ".join(f"{k} {v}" for k, v in self.seasons.most_common())
-        regimes = "; ".join(f"{k} {REGIME_NAMES.get(k, '?')} {100 * v / n:.0f} %"
+        regimes = "; ".join(f"{k} {REGIME_NAMES.get(k, '?')} {_pct(v, n)}"
                             for k, v in self.regimes.most_common()) or "none"
-        angles = ", ".join(f"{k:g}° {100 * v / n:.0f} %"
+        angles = ", ".join(f"{k:g}° {_pct(v, n)}"
                            for k, v in sorted(self.louver_angles.items())) or "none"
         fallbacks = ", ".join(f"{k} ({v})" for k, v in self.fallbacks.most_common()) or "none"
         flags = ", ".join(f"{k} {v}" for k, v in self.flags_by_reason.most_common())
@@ -239,3 +239,9 @@ _METHODS = {"mpc": "optimiser", "rule": "rule-based baseline", "safe": "safe pos
 
 def _num(v: float) -> str:
     return f"{v:.3g}"
+
+
+def _pct(count: int, total: int) -> str:
+    """``count`` of ``total`` in whole percent; a rare but present case shows as "<1 %"."""
+    pct = 100.0 * count / total
+    return "<1 %" if 0 < pct < 0.5 else f"{pct:.0f} %"
