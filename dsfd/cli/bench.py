@@ -53,6 +53,18 @@ def _bench_control(args: argparse.Namespace) -> dict[str, float]:
     return bench_control(args.config, cases=args.cases, seed=args.seed)
 
 
+def _bench_paper_tables(args: argparse.Namespace) -> dict[str, float]:
+    from dsfd.sim.paper_tables import VALIDATION_DAYS, WEATHER, paper_tables, report
+
+    figures = paper_tables(load_panel(args.config), seed=args.seed,
+                           weather=args.weather or WEATHER,
+                           validation_days=VALIDATION_DAYS if args.days is None else args.days,
+                           progress=lambda msg: print(msg, file=sys.stderr, flush=True))
+    print(report(figures))
+    print()
+    return figures
+
+
 #: Benchmark targets: name → function(args) → flat figures.
 TARGETS: dict[str, Callable[[argparse.Namespace], dict[str, float]]] = {
     "model": _bench_model,
@@ -60,6 +72,7 @@ TARGETS: dict[str, Callable[[argparse.Namespace], dict[str, float]]] = {
     "plant": _bench_plant,
     "daemon": _bench_daemon,
     "calibration": _bench_calibration,
+    "paper-tables": _bench_paper_tables,
 }
 
 
@@ -72,7 +85,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help=f"panel YAML (default {DEFAULT_PANEL})")
     p.add_argument("--days", type=float, default=None,
                    help="simulated duration where the target simulates (plant: 3; daemon: "
-                   "10,000 one-minute cycles)")
+                   "10,000 one-minute cycles; paper-tables: 3 scored days after the "
+                   "training day)")
     p.add_argument("--seed", type=int, default=0, help="seed of the target's randomness")
     p.add_argument("--cases", type=int, default=200,
                    help="control: random decision problems judged against brute force")

@@ -96,7 +96,7 @@ def _held(y: np.ndarray) -> np.ndarray:
 
 def replay_scores(cfg: PanelConfig, steps: StepData, *, offline_theta: np.ndarray | None = None,
                   horizons: tuple[int, ...] = (1, 15), warmup_h: float = 0.0,
-                  online: bool = True,
+                  online: bool = True, reference_v_ms: np.ndarray | None = None,
                   progress: Callable[[int, int, int], None] | None = None) -> dict[str, float]:
     """Scores of the models on a measured record (flat keys, units in the names).
 
@@ -114,6 +114,11 @@ def replay_scores(cfg: PanelConfig, steps: StepData, *, offline_theta: np.ndarra
         Hours at the start that are replayed but not scored.
     online : bool
         Run the self-calibrating model (the slow part).
+    reference_v_ms : array (n + 1,), optional, [m/s]
+        The true cavity speed |v| at the probe at each row (a simulation's ``truth_v_cav_ms``).
+        Adds the velocity scores against it (``<model>.velocity_true_mae_cms.regime_<r>``)
+        and the anemometer's own error (``sensor.velocity_mae_cms.regime_<r>``: the score a
+        perfect model would get against the readings).
     progress : callable (row, rows, updates), optional
 
     Returns
@@ -172,10 +177,18 @@ def replay_scores(cfg: PanelConfig, steps: StepData, *, offline_theta: np.ndarra
             sel = ok & (regime == r)
             out[f"measured.velocity_mean_cms.regime_{r}"] = float(np.mean(v_meas[sel]) * 100)
             out[f"measured.velocity_samples.regime_{r}"] = float(sel.sum())
+            v_true = (None if reference_v_ms is None
+                      else np.abs(np.asarray(reference_v_ms, float))[starts + 1])
+            if v_true is not None:
+                out[f"sensor.velocity_mae_cms.regime_{r}"] = float(
+                    np.nanmean(np.abs(v_meas[sel] - v_true[sel])) * 100)
             for m in [*names, "persistence"]:
                 v = v_held if m == "persistence" else preds[m][1][:, 0]
                 out[f"{m}.velocity_mae_cms.regime_{r}"] = float(
                     np.mean(np.abs(v[sel] - v_meas[sel])) * 100)
+                if v_true is not None:
+                    out[f"{m}.velocity_true_mae_cms.regime_{r}"] = float(
+                        np.nanmean(np.abs(v[sel] - v_true[sel])) * 100)
     for i, m in enumerate(names):
         if m in ("online", "offline"):
             final = theta_k[i, -1]

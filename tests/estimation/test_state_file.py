@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -56,6 +57,26 @@ def test_save_replaces_atomically(tmp_path, space, state):
     save_state(path, state, space)
     save_state(path, CalibrationState.initial("suwon-south", space), space)
     assert load_state(path, space=space, panel_id="suwon-south").updates == 0
+
+
+def test_a_write_interrupted_before_the_rename_leaves_the_old_file(tmp_path, space, state,
+                                                                   monkeypatch):
+    """A crash while saving keeps the previous state readable and leaves no temp file."""
+    path = tmp_path / "calibration.json"
+    save_state(path, state, space)
+    before = path.read_bytes()
+
+    def crash(src, dst):
+        assert Path(src).read_text().startswith("{")  # the new content was fully written
+        raise OSError("power cut")
+
+    monkeypatch.setattr("os.replace", crash)
+    with pytest.raises(OSError, match="power cut"):
+        save_state(path, CalibrationState.initial("suwon-south", space), space)
+    monkeypatch.undo()
+    assert path.read_bytes() == before
+    assert load_state(path, space=space, panel_id="suwon-south").updates == 42
+    assert [p.name for p in tmp_path.iterdir()] == ["calibration.json"]
 
 
 def test_missing_file_starts_from_the_priors(tmp_path, space):
