@@ -137,6 +137,13 @@ def run(args: argparse.Namespace, cfg: PanelConfig, series: WeatherSeries,
     if np.isfinite(s["decide_ms_median"]):
         print(f"decision time: median {s['decide_ms_median']:.1f} ms, "
               f"p99 {s['decide_ms_p99']:.1f} ms")
+    print("by sky condition (cf. the paper's Figure 11):")
+    for name, row in s["by_condition"].items():
+        shares = ", ".join(f"{r}: {v:.0%}" for r, v in row["regime_share"].items())
+        corr = row.get("phi_vs_elevation_corr")
+        extra = "" if corr is None else f"; louver vs solar elevation r = {corr:+.2f}"
+        print(f"  {name:<9}{row['cycles']:6d} cycles, mean louver {row['phi_deg_mean']:+6.1f} "
+              f"deg; regimes {shares}{extra}")
     print(f"calibration updates: {s['calibration_updates']}")
     print(f"wall time: {s['wall_s']:.1f} s")
     if args.json:

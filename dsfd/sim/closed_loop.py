@@ -58,6 +58,7 @@ from dsfd.estimation.state import CalibrationState
 from dsfd.physics.constants import T_ZERO
 from dsfd.physics.forcing import Forcing, WeatherInputs, facade_forcing
 from dsfd.physics.model import LumpedModel
+from dsfd.physics.solar import extraterrestrial_irradiance, solar_position
 from dsfd.sim.actuators import Command
 from dsfd.sim.plant import Plant
 from dsfd.sim.plant_config import PlantOptions
@@ -131,12 +132,14 @@ class ClosedLoopResult:
     step_s: float
     heat_j: dict[str, np.ndarray]  # per cycle, J over the interval that cycle commanded
     heating: np.ndarray  # per cycle, bool
+    ghi_wm2: np.ndarray  # per cycle, the station's global horizontal irradiance
     commands: list[Command]
     methods: Counter[str]
     decide_ms: np.ndarray
     calibration_updates: int
     final_theta: np.ndarray
     wall_s: float
+    site: tuple[float, float] = (0.0, 0.0)  # latitude, longitude [deg]
     notes: tuple[str, ...] = field(default_factory=tuple)
 
     @property
@@ -153,6 +156,41 @@ class ClosedLoopResult:
         """Commanded louver angle changes."""
         phis = [c.phi_deg for c in self.commands]
         return sum(1 for a, b in itertools.pairwise(phis) if a != b)
+
+    def conditions(self, latitude_deg: float, longitude_deg: float) -> np.ndarray:
+        """Sky condition of each cycle: ``night`` (sun below 5° or GHI < 20 W/m2), else by
+        the clearness index k_t = GHI / (E_0 cos z): ``clear`` (> 0.55), ``overcast``
+        (< 0.3) or ``mixed`` — the classes of the paper's Figure 11."""
+        t = self.start_s + (np.arange(self.cycles) + 0.5) * self.step_s
+        sun = solar_position(t, latitude_deg, longitude_deg)
+        cos_z = np.cos(np.radians(sun.zenith_deg))
+        kt = self.ghi_wm2 / np.maximum(extraterrestrial_irradiance(t) * cos_z, 1e-9)
+        night = (sun.elevation_deg < 5.0) | (self.ghi_wm2 < 20.0)
+        return np.where(night, "night", np.where(kt > 0.55, "clear",
+                                                 np.where(kt < 0.3, "overcast", "mixed")))
+
+    def by_condition(self, latitude_deg: float, longitude_deg: float) -> dict:
+        """Per sky condition: cycles, regime shares, mean louver angle [deg], and for clear
+        daytime the correlation of the louver angle with the solar elevation."""
+        cond = self.conditions(latitude_deg, longitude_deg)
+        phi = np.array([c.phi_deg for c in self.commands])
+        afr = np.array([c.afr for c in self.commands])
+        out: dict = {}
+        for name in ("clear", "mixed", "overcast", "night"):
+            sel = cond == name
+            if not sel.any():
+                continue
+            regimes = Counter(afr[sel].tolist())
+            out[name] = {"cycles": int(sel.sum()),
+                         "regime_share": {str(r): n / sel.sum()
+                                          for r, n in sorted(regimes.items())},
+                         "phi_deg_mean": float(phi[sel].mean())}
+        clear = cond == "clear"
+        if clear.sum() > 2 and np.ptp(phi[clear]) > 0:
+            t = self.start_s + (np.flatnonzero(clear) + 0.5) * self.step_s
+            elev = solar_position(t, latitude_deg, longitude_deg).elevation_deg
+            out["clear"]["phi_vs_elevation_corr"] = float(np.corrcoef(phi[clear], elev)[0, 1])
+        return out
 
     def summary(self) -> dict:
         """Figures in engineering units (kWh, moves per day, ms), JSON-ready."""
@@ -175,6 +213,7 @@ class ClosedLoopResult:
             "decide_ms_median": float(np.median(d)) if d.size else math.nan,
             "decide_ms_p99": float(np.percentile(d, 99)) if d.size else math.nan,
             "calibration_updates": self.calibration_updates,
+            "by_condition": self.by_condition(*self.site),
             "final_theta": [float(v) for v in self.final_theta[:9]],
             "wall_s": self.wall_s,
             "notes": list(self.notes),
@@ -229,6 +268,12 @@ def run_closed_loop(cfg: PanelConfig, series: WeatherSeries, settings: ClosedLoo
     site = at_site(series, cfg)
     dt = float(cfg.model.step_s)
     start, n = step_window(site, dt, start_s=settings.start_s, hours=settings.hours)
+    # Every controller stops where the oracle's perfect forecast still has data, so runs of
+    # different controllers over "all the weather" cover the same window.
+    fits = int((site.coverage_s[1] - start) // dt) - cfg.control.horizon_steps - 1
+    if fits < 1:
+        raise ValueError("the weather ends within one control horizon of the start")
+    n = min(n, fits)
     plant = Plant(cfg, settings.options, seed=settings.seed, weather_series=site)
     plant.reset(start, command=settings.fixed_command if settings.controller == "fixed"
                 else None)
@@ -264,6 +309,7 @@ async def _run(cfg: PanelConfig, plant: Plant, settings: ClosedLoopSettings, sta
         controller.plant = plant
     heat: dict[str, list[float]] = {k: [] for k in ROOM_FLOWS}
     heating: list[bool] = []
+    ghi: list[float] = []
     commands: list[Command] = []
     methods: Counter[str] = Counter()
     decide_ms: list[float] = []
@@ -292,6 +338,7 @@ async def _run(cfg: PanelConfig, plant: Plant, settings: ClosedLoopSettings, sta
                 t_out = plant.station_weather()["t_out_c"]
                 is_heating = _heating(cfg, t_out)
             heating.append(bool(is_heating))
+            ghi.append(plant.station_weather()["ghi_wm2"])
             commands.append(cmd)
             methods[method] += 1
             decide_ms.append(ms)
@@ -303,9 +350,11 @@ async def _run(cfg: PanelConfig, plant: Plant, settings: ClosedLoopSettings, sta
     return ClosedLoopResult(
         settings=settings, panel=cfg.panel.id, start_s=start, step_s=float(cfg.model.step_s),
         heat_j={k: np.asarray(v) for k, v in heat.items()}, heating=np.asarray(heating),
+        ghi_wm2=np.asarray(ghi, float),
         commands=commands, methods=methods, decide_ms=np.asarray(decide_ms, float),
         calibration_updates=updates, final_theta=calibration.theta,
         wall_s=time.perf_counter() - wall,
+        site=(cfg.site.latitude_deg, cfg.site.longitude_deg),
         notes=(f"truth plant seed {settings.seed}; true h multipliers "
                + ", ".join(f"{m:.2f}" for m in plant.params.h_multipliers)
                + f"; f_true {plant.params.f:.0f}",))

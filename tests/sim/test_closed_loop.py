@@ -114,3 +114,13 @@ def test_cli_rejects_impossible_combinations(args, message):
                            *args], capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2
     assert message in proc.stderr
+
+
+def test_sky_conditions_of_a_clear_late_morning(suwon, sunny):
+    """2 January at Golden was clear: by k_t the late morning is 'clear', not night."""
+    r = sunny["rule"]
+    cond = r.conditions(suwon.site.latitude_deg, suwon.site.longitude_deg)
+    assert (cond == "clear").mean() > 0.8
+    table = r.by_condition(suwon.site.latitude_deg, suwon.site.longitude_deg)
+    assert table["clear"]["cycles"] == int((cond == "clear").sum())
+    assert sum(table["clear"]["regime_share"].values()) == pytest.approx(1.0)
