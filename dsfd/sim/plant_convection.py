@@ -68,6 +68,9 @@ def coefficients(geo: ConvectionGeometry, t1: np.ndarray, t2: np.ndarray, t3: np
     air = np.concatenate((to, to, ti, ti))
     t_mf = t_in + 0.25 * (t3 - t_in)
     tf = np.concatenate((0.5 * (surf + air), to, ti, 0.5 * (to + ti), t_mf, 0.5 * (t2 + t3)))
+    # An implicit solver's rejected trial step can hand in absurd temperatures; keep the
+    # property fits (linear in T) positive there so they give a finite, not NaN, answer.
+    tf = np.maximum(tf, 150.0)
     k = 2.873e-3 + 7.76e-5 * tf
     mu = 3.723e-6 + 4.94e-8 * tf
     rho = p / (R_AIR * tf)
