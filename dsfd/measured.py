@@ -34,13 +34,13 @@ from __future__ import annotations
 import csv
 import io
 import math
-import os
-import tempfile
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
 
 import numpy as np
+
+from dsfd.storage.atomic import write_text_atomic
 
 CONTROL_COLUMNS = ("phi_deg", "afr", "or_pct")
 STATE_COLUMNS = ("x1_c", "x2_c", "x3_c", "x4_c", "x5_c", "t_room_c", "v_cav_ms")
@@ -213,18 +213,6 @@ def write_measured(data: MeasuredData, path: str | Path, *, precision: int = 4) 
             else:
                 row.append(f"{v:.{precision}f}".rstrip("0").rstrip(".") if v else "0")
         w.writerow(row)
-    _atomic_write_text(path, buf.getvalue())
+    write_text_atomic(path, buf.getvalue(), newline="")
 
 
-def _atomic_write_text(path: Path, text: str) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise

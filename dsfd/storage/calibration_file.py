@@ -16,8 +16,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -26,6 +24,7 @@ import yaml
 
 from dsfd.estimation.params import FIT_NAMES, OFFSET_NAMES, ParameterSpace
 from dsfd.estimation.state import CalibrationState, CalibrationStateError, state_from_dict
+from dsfd.storage.atomic import write_text_atomic
 
 PARAMS_SCHEMA = "dsfd.parameters"
 PARAMS_SCHEMA_VERSION = 1
@@ -33,27 +32,6 @@ PARAMS_SCHEMA_VERSION = 1
 
 class CalibrationFileError(ValueError):
     """A state or parameters file that cannot be used; the message names file and key."""
-
-
-def write_text_atomic(path: str | Path, text: str) -> None:
-    """Replace ``path`` with ``text`` atomically (temp file, fsync, rename, directory fsync)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    dir_fd = os.open(path.parent, os.O_RDONLY)
-    try:
-        os.fsync(dir_fd)
-    finally:
-        os.close(dir_fd)
 
 
 # --------------------------------------------------------------------------- state file
