@@ -86,7 +86,10 @@ def test_device_down_at_start_and_gone_mid_run_recovers_within_two_cycles(
     # actuators), the station still delivers.
     for c in range(1, up + 1):
         assert x1[c] == "disconnected", (c, x1[c])
-        assert decisions[c] == ("rule", "failed"), (c, decisions[c])
+        # The station's very first reading may miss cycle 1 (it starts with the daemon):
+        # without outdoor air even the baseline cannot decide, and the safe state holds.
+        expected = "rule" if t_out[c] == "good" else "safe"
+        assert decisions[c] == (expected, "failed"), (c, t_out[c], decisions[c])
     assert all(t_out[c] == "good" for c in range(2, CYCLES + 1))
     # The module boots: GOOD within two cycles, then the optimiser decides again.
     assert first_good_after(up) <= up + 2
