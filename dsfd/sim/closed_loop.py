@@ -320,11 +320,11 @@ async def _run(cfg: PanelConfig, plant: Plant, settings: ClosedLoopSettings, sta
             await clock.sleep_until(i * plant.cfg.model.step_s)
             if settings.controller == "fixed":
                 await driver.read(clock.wall())  # advances the plant to the cycle time
-                cmd, method, is_heating, ms = settings.fixed_command, "fixed", None, math.nan
+                cmd, method, mode, ms = settings.fixed_command, "fixed", None, math.nan
             else:
                 out = await controller.run_cycle(Slot(i, clock.monotonic(), 0))
                 cmd = Command(out.command.phi_deg, out.command.afr, out.command.or_pct)
-                method, is_heating = out.method, out.heating
+                method, mode = out.method, out.heating
                 ms = out.timings_ms.get("decide", math.nan)
                 updates += int(out.calibration is not None and out.calibration.updated)
             before = plant.room_heat_j()
@@ -334,11 +334,11 @@ async def _run(cfg: PanelConfig, plant: Plant, settings: ClosedLoopSettings, sta
             # behind), so the room heat of each interval is attributed to its command.
             for k in ROOM_FLOWS:
                 heat[k].append(after[k] - before[k])
-            if is_heating is None:
-                t_out = plant.station_weather()["t_out_c"]
-                is_heating = _heating(cfg, t_out)
-            heating.append(bool(is_heating))
-            ghi.append(plant.station_weather()["ghi_wm2"])
+            station = plant.station_weather()
+            if mode is None:  # no controller decided a mode: the panel's rule, as the loop
+                mode = is_heating(cfg.control, station["t_out_c"] + T_ZERO)
+            heating.append(bool(mode))
+            ghi.append(station["ghi_wm2"])
             commands.append(cmd)
             methods[method] += 1
             decide_ms.append(ms)
@@ -359,6 +359,3 @@ async def _run(cfg: PanelConfig, plant: Plant, settings: ClosedLoopSettings, sta
                + ", ".join(f"{m:.2f}" for m in plant.params.h_multipliers)
                + f"; f_true {plant.params.f:.0f}",))
 
-
-def _heating(cfg: PanelConfig, t_out_c: float) -> bool:
-    return bool(is_heating(cfg.control, t_out_c + T_ZERO))
