@@ -34,6 +34,7 @@ from dsfd.sim.plant_convection import ConvectionGeometry, coefficients
 from dsfd.sim.plant_flow import (
     EB,
     IB,
+    IS_TOP,
     IT,
     NETWORK,
     PAIR,
@@ -378,17 +379,27 @@ class PlantModel:
                      "p": p, "phi_deg": ctx.act.phi_at(t), "src": src}
         return out
 
+    def opening_temperatures(self, fl: dict, face_out: float | None, m_cav: float
+                             ) -> np.ndarray:
+        """Temperature of the air at each opening EB, ET, IB, IT [K]: the bottom or top air
+        node; with second-order advection and no plenums, the outflow end at its
+        reconstructed face value."""
+        t = np.array([fl["t_top"] if top else fl["t_bot"] for top in IS_TOP])
+        if face_out is not None and not self.lay.plenums:
+            downstream = np.array(IS_TOP) if m_cav > 0 else ~np.array(IS_TOP)
+            t = np.where(downstream, t + face_out, t)
+        return t
+
     def _q_air(self, m: list[float], fl: dict, face_out: float | None, m_cav: float,
                t_out: float, t_in: float) -> float:
         """Q_air into the room [W] (errata E2) with a = ṁ cavity → room at the temperature of
         the air leaving through IB/IT, b = ṁ room → cavity."""
+        t_open = self.opening_temperatures(fl, face_out, m_cav)
         a = b = a_t = 0.0
-        for k, t_k in ((IB, fl["t_bot"]), (IT, fl["t_top"])):
-            if face_out is not None and (k == IT) == (m_cav > 0):
-                t_k += face_out  # leaves at the reconstructed outlet face (2nd order)
+        for k in (IB, IT):
             if m[k] < 0.0:
                 a -= m[k]
-                a_t -= m[k] * t_k
+                a_t -= m[k] * t_open[k]
             else:
                 b += m[k]
         if a <= 0.0:

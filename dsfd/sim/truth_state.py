@@ -10,7 +10,6 @@ import numpy as np
 
 from dsfd.physics.airflow import ALL_OPEN, CLOSED, PATHS
 from dsfd.physics.constants import R_AIR, T_ZERO
-from dsfd.sim.plant_flow import IS_TOP
 
 if TYPE_CHECKING:
     from dsfd.sim.plant import Plant
@@ -104,11 +103,7 @@ def true_state(plant: Plant, ev: dict) -> TrueState:
     fl = ev["flows"]
     m = np.asarray(fl["m"], float)
     out_w = np.where(m < 0, -m, 0.0)
-    t_node = np.array([fl["t_top"] if top else fl["t_bot"] for top in IS_TOP])
-    if ev["face_out"] is not None and not lay.plenums:
-        # Second-order advection: the air leaves at the reconstructed outlet-face value.
-        downstream = np.array(IS_TOP) if ev["m_cav"] > 0 else ~np.array(IS_TOP)
-        t_node = np.where(downstream, t_node + ev["face_out"], t_node)
+    t_node = model.opening_temperatures(fl, ev["face_out"], ev["m_cav"])
     t_outlet = float(out_w @ t_node / out_w.sum()) if out_w.sum() > 0 else math.nan
     p = ev["p"]
     area = model.openings.cavity_area_m2
