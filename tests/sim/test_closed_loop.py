@@ -124,3 +124,11 @@ def test_sky_conditions_of_a_clear_late_morning(suwon, sunny):
     table = r.by_condition(suwon.site.latitude_deg, suwon.site.longitude_deg)
     assert table["clear"]["cycles"] == int((cond == "clear").sum())
     assert sum(table["clear"]["regime_share"].values()) == pytest.approx(1.0)
+
+
+def test_a_start_within_one_horizon_of_the_data_end_is_refused(suwon, rmis_raw, rmis):
+    start = rmis.coverage_s[1] - 10 * suwon.model.step_s
+    settings = ClosedLoopSettings(controller="rule", calibration="none", start_s=start,
+                                  options=FAST)
+    with pytest.raises(ValueError, match="within one control horizon"):
+        run_closed_loop(suwon, rmis_raw, settings)
