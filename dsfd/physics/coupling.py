@@ -104,6 +104,8 @@ class StepResult(NamedTuple):
     evaluations : int
         Coupled evaluations used by the fixed point.
     converged : bool
+    coupling_slope : [-]
+        Last slope of h(T5) = Φ(T5) − T5 (warm start of the next step; NaN if unknown).
     """
 
     x_next: np.ndarray
@@ -117,6 +119,7 @@ class StepResult(NamedTuple):
     heat_in_wm2: np.ndarray
     evaluations: np.ndarray
     converged: np.ndarray
+    coupling_slope: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -140,6 +143,10 @@ class NetworkConstants:
     q_air_basis: str
 
 
+_SECANT_A = np.array([1, 0, 0, 3, 0, 2])  # first node of each radiative pair
+_SECANT_B = np.array([2, 3, 1, 1])  # second node of the internal pairs
+
+
 def secant(t_a: np.ndarray, t_b: np.ndarray) -> np.ndarray:
     """σ(T_a² + T_b²)(T_a + T_b) [W/(m2 K4)]: secant slope of σT⁴ between T_a and T_b."""
     return SIGMA * (t_a * t_a + t_b * t_b) * (t_a + t_b)
@@ -148,16 +155,27 @@ def secant(t_a: np.ndarray, t_b: np.ndarray) -> np.ndarray:
 def frozen_network(nc: NetworkConstants, x: np.ndarray, inp: StepInputs,
                    theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, Boundary]:
     """L0, q0 without airflow, radiative conductances linearised at x (§9.2, §14)."""
-    h_out, h1, h2, h3, h4, h_in = (theta[:, i] for i in range(6))
-    # Secant radiative slopes of the pairs (x2,x3) (x1,x4) (x1,x2) (x4,x2) (x1,T_rad) (x3,T_mrt)
-    t_a = np.stack([x[:, 1], x[:, 0], x[:, 0], x[:, 3], x[:, 0], x[:, 2]], axis=-1)
-    t_b = np.stack([x[:, 2], x[:, 3], x[:, 1], x[:, 1], inp.t_rad_out_k, inp.t_mrt_k], axis=-1)
+    h_out, h_in = theta[:, 0], theta[:, 5]
+    # Secant radiative slopes of the pairs (x2,x3) (x1,x4) (x1,x2) (x4,x2) (x1,T_rad) (x3,T_mrt).
+    # Columns are filled in place: this runs every step of every rollout, and for small
+    # batches the array bookkeeping of stack() costs more than the arithmetic.
+    nb = x.shape[0]
+    t_a = x[:, _SECANT_A]
+    t_b = np.empty((nb, 6))
+    t_b[:, :4] = x[:, _SECANT_B]
+    t_b[:, 4] = inp.t_rad_out_k
+    t_b[:, 5] = inp.t_mrt_k
     sec = secant(t_a, t_b)
     lw = inp.lw_exchange
-    louver_link = nc.slat_area_ratio * h2 if nc.has_louver else np.full_like(h2, NO_LOUVER_LINK)
-    cond = np.stack([h1, louver_link, h3, h4, h4, nc.h_r23_factor * sec[:, 0],
-                     lw[:, 0] * sec[:, 1], lw[:, 1] * sec[:, 2], lw[:, 2] * sec[:, 3]], axis=-1)
-    zero = np.zeros_like(h1)
+    cond = np.empty((nb, 9))
+    cond[:, 0] = theta[:, 1]
+    cond[:, 1] = nc.slat_area_ratio * theta[:, 2] if nc.has_louver else NO_LOUVER_LINK
+    cond[:, 2] = theta[:, 3]
+    cond[:, 3] = theta[:, 4]
+    cond[:, 4] = theta[:, 4]
+    cond[:, 5] = nc.h_r23_factor * sec[:, 0]
+    cond[:, 6:9] = lw[:, :3] * sec[:, 1:4]
+    zero = np.zeros(nb)
     bnd = Boundary(
         h_out=h_out,
         h_rad_out=nc.eps_l1_front * sec[:, 4],
@@ -209,10 +227,12 @@ def q_air(nc: NetworkConstants, m_dot: np.ndarray, x5_mean: np.ndarray,
 
 
 def coupled_step(nc: NetworkConstants, x: np.ndarray, inp: StepInputs, theta: np.ndarray,
-                 setup: FlowSetup, t5_guess: np.ndarray | None = None) -> StepResult:
+                 setup: FlowSetup, t5_guess: np.ndarray | None = None,
+                 slope_guess: np.ndarray | None = None) -> StepResult:
     """Advance states ``x`` (B, 6) by one step with prepared inputs and flow setup.
 
-    ``t5_guess`` [K] starts the coupling fixed point (default: x5 at the start of the step).
+    ``t5_guess`` [K] starts the coupling fixed point (default: x5 at the start of the step);
+    ``slope_guess`` [-] is dh/dT5 of the previous, similar step (its ``coupling_slope``).
     """
     lap0, q0, bnd0 = frozen_network(nc, x, inp, theta)
     if nc.coupling == "ping_pong":
@@ -242,14 +262,15 @@ def coupled_step(nc: NetworkConstants, x: np.ndarray, inp: StepInputs, theta: np
         return st.x_next[:, X5]
 
     t0 = x[:, X5] if t5_guess is None else t5_guess
-    fp = solve_fixed_point(phi, t0, tol=nc.tol_k, max_evals=nc.max_evals)
+    fp = solve_fixed_point(phi, t0, tol=nc.tol_k, max_evals=nc.max_evals, slope=slope_guess)
     if exact:
         r = 1.0 / np.sqrt(nc.capacity)
         x_next, x_mean, _ = modal_step(Modal(lam, vec, r, x_star), x, nc.dt)
     m9 = out_m9[setup.rows_all_open] if out_m9 is not None else np.zeros((0, 4))
     flow = opening_flows(setup, PathFlow(out_flow, out_rho, m9))
     bnd = bnd0._replace(g_adv=out_g, t_inflow=out_tin)
-    return _result(nc, x_next, x_mean, flow, inp, bnd, fp.evaluations, fp.converged)
+    return _result(nc, x_next, x_mean, flow, inp, bnd, fp.evaluations, fp.converged,
+                   slope=fp.slope)
 
 
 def _ping_pong(nc: NetworkConstants, x, inp, lap0, q0, bnd0, setup) -> StepResult:
@@ -280,7 +301,7 @@ def _ping_pong(nc: NetworkConstants, x, inp, lap0, q0, bnd0, setup) -> StepResul
 
 
 def _result(nc: NetworkConstants, x_next, x_mean, flow, inp, bnd, evals, conv,
-            air=None) -> StepResult:
+            air=None, slope=None) -> StepResult:
     a_f = nc.geom.facade_area_m2
     x3 = x_mean[:, 2]
     q_cv_rd = a_f * (bnd.h_in * (x3 - inp.t_in_k) + bnd.h_rad_in * (x3 - inp.t_mrt_k))
@@ -296,4 +317,5 @@ def _result(nc: NetworkConstants, x_next, x_mean, flow, inp, bnd, evals, conv,
         heat_in_wm2=boundary_heat_in(x_mean, bnd, inp.sources),
         evaluations=evals,
         converged=conv,
+        coupling_slope=np.full(x_next.shape[0], np.nan) if slope is None else slope,
     )

@@ -227,16 +227,18 @@ class LumpedModel:
         xs = np.empty((nb, horizon + 1, 6))
         xs[:, 0] = x
         cols = []
-        guess = None
+        guess = slope = None
         for k in range(horizon):
             res = coupled_step(nc, x, inp.at((slice(None), k)), theta[:, k],
-                               setup.at((slice(None), k)), guess)
+                               setup.at((slice(None), k)), guess, slope)
             cols.append(res)
             # Warm start: under unchanged controls the cavity air changes by about as much
-            # as in the last step; after a control change start from the state.
+            # as in the last step and the coupling keeps its slope; after a control change
+            # start from the state.
             if k + 1 < horizon:
                 same = (regime[:, k + 1] == regime[:, k]) & (or_[:, k + 1] == or_[:, k])
                 guess = np.where(same, 2.0 * res.x_next[:, 4] - x[:, 4], res.x_next[:, 4])
+                slope = np.where(same, res.coupling_slope, np.nan)
             x = res.x_next
             xs[:, k + 1] = x
 

@@ -88,16 +88,11 @@ def assemble(conductance: np.ndarray, bnd: Boundary,
     lap[..., _DIAG[X1]] -= d1
     lap[..., _DIAG[X3]] -= d3
     lap[..., _DIAG[X5]] -= bnd.g_adv
-    zero = np.zeros_like(d1)
-    q = np.stack([
-        bnd.h_out * bnd.t_out + bnd.h_rad_out * bnd.t_rad_out,
-        zero,
-        bnd.h_in * bnd.t_in + bnd.h_rad_in * bnd.t_mrt,
-        zero,
-        bnd.g_adv * bnd.t_inflow,
-        zero,
-    ], axis=-1)
-    q[..., :4] += sources
+    q = np.zeros((*lap.shape[:-1], N_STATES))
+    q[..., :4] = sources
+    q[..., X1] += bnd.h_out * bnd.t_out + bnd.h_rad_out * bnd.t_rad_out
+    q[..., X3] += bnd.h_in * bnd.t_in + bnd.h_rad_in * bnd.t_mrt
+    q[..., X5] += bnd.g_adv * bnd.t_inflow
     return lap.reshape(*lap.shape[:-1], N_STATES, N_STATES), q
 
 

@@ -90,10 +90,10 @@ class FlowSetup(NamedTuple):
 
     def at(self, index) -> FlowSetup:
         """Index every per-row field (e.g. ``(slice(None), k)`` for step k of a horizon)."""
-        out = FlowSetup(*(
-            v[index] if isinstance(v, np.ndarray) and k != "rows_all_open" else v
-            for k, v in zip(self._fields, self, strict=True)
-        ))
+        out = FlowSetup._make([
+            v[index] if per_row and isinstance(v, np.ndarray) else v
+            for v, per_row in zip(self, _PER_ROW, strict=True)
+        ])
         return out._relabel()
 
     def reshape(self, shape: tuple[int, ...]) -> FlowSetup:
@@ -110,6 +110,13 @@ class FlowSetup(NamedTuple):
             return self
         rows = np.flatnonzero(self.law == _LAW_ALL)
         return self._replace(rows_all_open=rows, any_all_open=bool(rows.size))
+
+
+#: Which FlowSetup fields are indexed per batch row (arrays, except the all-open row index).
+_PER_ROW = tuple(
+    name not in ("any_orifice", "any_power", "any_all_open", "rows_all_open")
+    for name in FlowSetup._fields
+)
 
 
 def flow_setup(

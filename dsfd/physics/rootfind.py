@@ -5,12 +5,14 @@ h(T) = Φ(T) − T. Φ is bounded (flows are bounded), so h → +∞ as T → �
 T → +∞ and a sign change always exists.
 
 Method: the first step is the plain iteration T₁ = Φ(T₀) (Φ depends weakly on T, so this
-is already close), then secant steps. Before the root is bracketed a step must move in
-the direction of the sign of h and is limited to ``max_step``; once a sign change is
-seen, the secant step is accepted only if it falls between the latest point and the
-bracket midpoint, otherwise the bracket is bisected (Dekker's method). The latest
-iterate is always the returned one, so callers can keep per-evaluation side results.
-Uniqueness of the root is not guaranteed (errata E9); the one bracketed is returned.
+is already close) or, when the caller knows the slope of h from a neighbouring solve (the
+previous step of a rollout), a Newton step with that slope; then secant steps. Before the
+root is bracketed a step must move in the direction of the sign of h and is limited to
+``max_step``; once a sign change is seen, the secant step is accepted only if it falls
+between the latest point and the bracket midpoint, otherwise the bracket is bisected
+(Dekker's method). The latest iterate is always the returned one, so callers can keep
+per-evaluation side results. Uniqueness of the root is not guaranteed (errata E9); the
+one bracketed is returned.
 
 Reference: T. J. Dekker, "Finding a zero by means of successive linear interpolation",
 in Constructive Aspects of the Fundamental Theorem of Algebra, Wiley (1969) 37–48.
@@ -31,6 +33,9 @@ class FixedPoint(NamedTuple):
     t: np.ndarray
     evaluations: np.ndarray
     converged: np.ndarray
+    slope: np.ndarray
+    """Last secant slope of h(T) = Φ(T) − T [-] (the given slope, or NaN, after a single
+    evaluation): a warm start for the next, similar solve."""
 
 
 def solve_fixed_point(
@@ -40,6 +45,7 @@ def solve_fixed_point(
     tol: float,
     max_evals: int,
     max_step: float = 50.0,
+    slope: np.ndarray | None = None,
 ) -> FixedPoint:
     """Solve ``t = phi(t)`` elementwise.
 
@@ -56,6 +62,10 @@ def solve_fixed_point(
         Evaluation limit per element (≥ 2).
     max_step : float
         Largest single move before the root is bracketed.
+    slope : array (B,), optional
+        Estimate of dh/dT at the start (e.g. :attr:`FixedPoint.slope` of the previous step).
+        A finite negative value turns the first move into a Newton step, which usually
+        lands within the tolerance so that the second evaluation is the last.
 
     Returns
     -------
@@ -63,13 +73,19 @@ def solve_fixed_point(
     """
     b = np.array(t0, dtype=float).ravel()
     nb = b.size
+    s0 = np.full(nb, np.nan) if slope is None else np.broadcast_to(
+        np.asarray(slope, float).ravel(), (nb,))
+    s0 = np.where(s0 < 0, s0, np.nan)  # h decreases through its root: other slopes are stale
     if nb == 1:
-        return _solve_one(phi, float(b[0]), tol=tol, max_evals=max_evals, max_step=max_step)
+        return _solve_one(phi, float(b[0]), tol=tol, max_evals=max_evals, max_step=max_step,
+                          slope=float(s0[0]))
     rows = np.arange(nb)
     fb = phi(b, rows) - b
     evals = np.ones(nb, dtype=int)
-    c = np.full(nb, np.nan)
-    fc = np.full(nb, np.nan)
+    # A known slope acts as a virtual earlier point one kelvin away: the first secant
+    # step is then Newton's step.
+    c = np.where(np.isfinite(s0), b - 1.0, np.nan)
+    fc = fb - s0
     a = np.full(nb, np.nan)
     done = np.abs(fb) <= tol
     while True:
@@ -103,11 +119,13 @@ def solve_fixed_point(
             | (evals[rows] >= max_evals)
         )
     converged = (np.abs(fb) <= tol) | (np.abs(a - b) <= tol)
-    return FixedPoint(t=b, evaluations=evals, converged=converged)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        last = np.where(evals > 1, (fb - fc) / (b - c), s0)
+    return FixedPoint(t=b, evaluations=evals, converged=converged, slope=last)
 
 
 def _solve_one(phi: Callable[[np.ndarray, np.ndarray], np.ndarray], b: float, *, tol: float,
-               max_evals: int, max_step: float) -> FixedPoint:
+               max_evals: int, max_step: float, slope: float) -> FixedPoint:
     """The same iteration for a single element, on Python floats (no array overhead)."""
     row = np.zeros(1, dtype=int)
 
@@ -117,6 +135,8 @@ def _solve_one(phi: Callable[[np.ndarray, np.ndarray], np.ndarray], b: float, *,
     fb = h(b)
     evals = 1
     c = fc = a = math.nan
+    if math.isfinite(slope):
+        c, fc = b - 1.0, fb - slope
     while abs(fb) > tol and evals < max_evals:
         sec = b - fb * (b - c) / (fb - fc) if fb != fc and math.isfinite(c) else b + fb
         if not math.isfinite(sec):
@@ -135,4 +155,6 @@ def _solve_one(phi: Callable[[np.ndarray, np.ndarray], np.ndarray], b: float, *,
         if math.isfinite(a) and abs(a - b) <= tol:
             break
     ok = abs(fb) <= tol or (math.isfinite(a) and abs(a - b) <= tol)
-    return FixedPoint(t=np.array([b]), evaluations=np.array([evals]), converged=np.array([ok]))
+    last = (fb - fc) / (b - c) if evals > 1 and b != c else slope
+    return FixedPoint(t=np.array([b]), evaluations=np.array([evals]), converged=np.array([ok]),
+                      slope=np.array([last]))

@@ -66,7 +66,7 @@ def modal(lap: np.ndarray, q: np.ndarray, cap: np.ndarray) -> Modal:
     cap : array (n,), [J/(m2 K)]
     """
     r = 1.0 / np.sqrt(cap)
-    lam, vec = np.linalg.eigh(lap * np.outer(r, r))
+    lam, vec = np.linalg.eigh(lap * (r[:, None] * r))
     w = ((r * q)[..., None, :] @ vec)[..., 0, :]  # Vᵀ C^-½ q
     x_star = -r * (vec @ (w / lam)[..., None])[..., 0]
     return Modal(lam, vec, r, x_star)

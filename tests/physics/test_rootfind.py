@@ -68,3 +68,37 @@ def test_evaluation_limit_is_respected():
     fp = solve_fixed_point(_phi_factory(fn)[0], np.array([310.0, 290.0]), tol=1e-15,
                            max_evals=5)
     assert np.all(fp.evaluations <= 5)
+
+
+@pytest.mark.parametrize("batch", [1, 5])
+def test_known_slope_makes_the_first_move_a_newton_step(batch):
+    """With dh/dT known (the previous step's slope), a linear map needs two evaluations;
+    without it the solver needs more, and both land on the same root."""
+    roots = np.linspace(285.0, 305.0, batch)
+    gain = 0.3  # Φ' (h' = Φ' − 1 = −0.7)
+
+    def fn(t, rows):
+        return roots[rows] + gain * (t - roots[rows])
+
+    cold = solve_fixed_point(_phi_factory(fn)[0], roots + 2.0, tol=1e-9, max_evals=40)
+    warm = solve_fixed_point(_phi_factory(fn)[0], roots + 2.0, tol=1e-9, max_evals=40,
+                             slope=np.full(batch, gain - 1.0))
+    assert warm.converged.all() and cold.converged.all()
+    assert np.all(warm.evaluations == 2)
+    assert np.all(cold.evaluations > 2)
+    np.testing.assert_allclose(warm.t, roots, atol=1e-9)
+    # The slope handed on to the next solve is that of the map.
+    np.testing.assert_allclose(cold.slope, gain - 1.0, rtol=1e-6)
+
+
+def test_stale_positive_slope_is_ignored():
+    """A slope with the wrong sign (h must fall through its root) falls back to the plain
+    first iteration instead of stepping away from the root."""
+
+    def fn(t, rows):
+        return 300.0 + 0.5 * (t - 300.0)
+
+    fp = solve_fixed_point(_phi_factory(fn)[0], np.array([310.0]), tol=1e-9, max_evals=40,
+                           slope=np.array([2.0]))
+    assert fp.converged.all()
+    np.testing.assert_allclose(fp.t, 300.0, atol=1e-8)
