@@ -27,6 +27,15 @@ def _bench_plant(args: argparse.Namespace) -> dict[str, float]:
                        weather=args.weather or DEFAULT_WEATHER)
 
 
+def _bench_plant_velocity(args: argparse.Namespace) -> dict[str, float]:
+    from dsfd.sim.bench_plant import DEFAULT_WEATHER
+    from dsfd.sim.bench_velocity import bench_plant_velocity
+
+    return bench_plant_velocity(load_panel(args.config), seeds=args.seeds,
+                                days=3.0 if args.days is None else args.days,
+                                weather=args.weather or DEFAULT_WEATHER)
+
+
 def _bench_daemon(args: argparse.Namespace) -> dict[str, float]:
     from dsfd.daemon.bench import DEFAULT_CYCLES, bench_daemon
 
@@ -70,6 +79,7 @@ TARGETS: dict[str, Callable[[argparse.Namespace], dict[str, float]]] = {
     "model": _bench_model,
     "control": _bench_control,
     "plant": _bench_plant,
+    "plant-velocity": _bench_plant_velocity,
     "daemon": _bench_daemon,
     "calibration": _bench_calibration,
     "paper-tables": _bench_paper_tables,
@@ -90,6 +100,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=int, default=0, help="seed of the target's randomness")
     p.add_argument("--cases", type=int, default=200,
                    help="control: random decision problems judged against brute force")
+    p.add_argument("--seeds", type=int, default=10,
+                   help="plant-velocity: seeded draws of the plant's true parameters")
     p.add_argument("--weather", default=None, help="weather file or bundled name")
     p.add_argument("--json", type=Path, default=None, help="write the figures as JSON")
     p.set_defaults(handler=run)

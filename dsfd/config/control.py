@@ -69,8 +69,17 @@ class Control:
         "then evaluated at the model's own step)", unit="s", gt=0, le=3600)
     screening_tolerance_k: float = setting(
         1e-3, doc="Coupling tolerance of the screening pass", unit="K", gt=0, le=0.1)
+    coupling_tolerance_k: float = setting(
+        1e-4, doc="Coupling tolerance of the full-resolution evaluations (the model's own "
+        "1e-6 K default is for reference runs; 1e-4 K moves Q_air by milliwatts)", unit="K",
+        gt=0, le=0.1)
     full_candidates: int = setting(
         8, doc="Screened candidates evaluated at full resolution", ge=1, le=500)
+    finalist_margin_pct: float = setting(
+        1.0, doc="The best screened candidate of every damper set within this much of the "
+        "screened best is also evaluated at full resolution (the coarse screening step "
+        "distorts costs by a fraction of a per cent, enough to misrank near a regime "
+        "switch)", unit="%", ge=0, le=100)
     louver_move_penalty_wh: float = setting(
         0.0, doc="Cost added per 18° louver step moved (motor wear)", unit="Wh", ge=0)
     time_budget_s: float = setting(

@@ -21,7 +21,7 @@ import numpy as np
 
 from dsfd.config.control import Control
 from dsfd.config.panel import REGIME_OPENINGS, PanelConfig
-from dsfd.control.objective import CostTerms, horizon_cost, louver_move_penalty
+from dsfd.control.objective import J_PER_WH, CostTerms, horizon_cost, louver_move_penalty
 from dsfd.physics.coupling import StepInputs
 from dsfd.physics.forcing import FacadeOptics, Forcing, step_inputs
 from dsfd.physics.model import LumpedModel
@@ -84,9 +84,11 @@ class HorizonEvaluator:
     """Batched horizon cost of constant controls for one decision."""
 
     def __init__(self, cfg: PanelConfig, model: LumpedModel, optics: FacadeOptics,
-                 problem: ControlProblem, angles_deg: np.ndarray) -> None:
+                 problem: ControlProblem, angles_deg: np.ndarray, *,
+                 coupling_tol_k: float | None = None) -> None:
         self.cfg = cfg
         self.model = model
+        self.coupling_tol_k = coupling_tol_k
         self.problem = problem
         self.angles_deg = np.asarray(angles_deg, float)
         self.loads = optics.loads(problem.forcing, np.radians(self.angles_deg))
@@ -111,7 +113,7 @@ class HorizonEvaluator:
         traj = self.model.rollout(
             self.problem.x0, np.broadcast_to(np.asarray(regime, int)[:, None], (n, h)),
             np.broadcast_to(np.asarray(or_, float)[:, None], (n, h)), self.inputs(angle_idx),
-            self.problem.theta)
+            self.problem.theta, coupling_tol_k=self.coupling_tol_k)
         self.rollouts += n
         terms = horizon_cost(traj, dt=self.model.dt, heating=self.problem.heating)
         terms = terms._replace(cost_j=terms.cost_j + self._penalty[angle_idx])
@@ -135,9 +137,11 @@ class MpcOptimiser:
     """Exact over louver positions × damper sets, bounded search over OR (module docstring).
 
     Stages: (1) screening of every louver position × damper set × coarse OR with a coarse
-    time step; (2) the best candidates of the screening at full resolution; (3) bounded OR
-    refinement of the best pairs at full resolution. The decision is the best full-resolution
-    candidate. Building the optimiser once per panel keeps its models and optics caches.
+    time step; (2) at full resolution, the best screened candidates, the best of every
+    damper set that screened close to the best, and OR brackets of the best pairs;
+    (3) parabolic OR refinement of the best pair at full resolution. The decision is the
+    best full-resolution candidate. Building the optimiser once per panel keeps its models
+    and optics caches.
     """
 
     def __init__(self, cfg: PanelConfig, model: LumpedModel | None = None,
@@ -177,7 +181,8 @@ class MpcOptimiser:
                      f"{self.screen_model.dt:g} s steps")
         # Stage 2, one full-resolution batch: the best screened candidates, and an OR
         # bracket around the screened optimum of the best open louver/regime pairs.
-        finalists = np.argsort(s_terms.cost_j, kind="stable")[: ctl.full_candidates]
+        finalists = _finalists(s_terms.cost_j, all_r, ctl.full_candidates,
+                               ctl.finalist_margin_pct)
         fa, fr, fo = all_a[finalists], all_r[finalists], all_o[finalists]
         if n_r:
             coarse = s_terms.cost_j[: n_a * n_r * n_g].reshape(n_a, n_r, n_g)
@@ -193,7 +198,8 @@ class MpcOptimiser:
             fa = np.concatenate([fa, np.repeat(pa, k)])
             fr = np.concatenate([fr, np.repeat(open_regimes[pr], k)])
             fo = np.concatenate([fo, pts.ravel()])
-        full = HorizonEvaluator(self.cfg, self.model, self.optics, problem, angles)
+        full = HorizonEvaluator(self.cfg, self.model, self.optics, problem, angles,
+                                coupling_tol_k=ctl.coupling_tolerance_k)
         terms, labels = full.evaluate(fa, fr, fo)
         best = _Best.of(terms, labels, fa, fr, fo)
         trace.append(f"stage 2: {fa.size} at full resolution ({len(finalists)} finalists, "
@@ -217,6 +223,22 @@ class MpcOptimiser:
         trace.append(f"stage 3: OR refined, best {best.describe(angles)}")
         return best.decision(angles, method="mpc",
                              rollouts=full.rollouts + screen.rollouts, trace=tuple(trace))
+
+
+def _finalists(cost: np.ndarray, regime: np.ndarray, n_best: int,
+               margin_pct: float) -> np.ndarray:
+    """Screened candidates for the full-resolution stage: the ``n_best`` best overall and
+    the best of every damper set whose screened cost is within ``margin_pct`` of the best.
+
+    Near a regime switch the damper sets can differ by a fraction of a per cent of the
+    cost, less than the screening's coarse time step distorts it; the best of each such
+    set then decides at full resolution which one wins.
+    """
+    order = np.argsort(cost, kind="stable")
+    _, first = np.unique(regime[order], return_index=True)
+    best = cost[order[0]]
+    close = first[cost[order[first]] - best <= margin_pct / 100.0 * max(abs(best), J_PER_WH)]
+    return np.unique(np.concatenate([order[:n_best], order[close]]))
 
 
 def _parabolic_points(ors: np.ndarray, costs: np.ndarray) -> np.ndarray:

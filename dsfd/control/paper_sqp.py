@@ -42,7 +42,8 @@ def optimise_paper_sqp(cfg: PanelConfig, model: LumpedModel, optics: FacadeOptic
     def cost(phi_deg: float, afr: int, or_: float) -> tuple[float, int]:
         loads = optics.loads(problem.forcing, np.radians(phi_deg))
         traj = model.rollout(problem.x0, np.full((1, h), afr), np.full((1, h), or_),
-                             step_inputs(problem.forcing, loads), problem.theta)
+                             step_inputs(problem.forcing, loads), problem.theta,
+                             coupling_tol_k=cfg.control.coupling_tolerance_k)
         calls["n"] += 1
         j = horizon_cost(traj, dt=model.dt, heating=problem.heating).cost_j[0]
         j += louver_move_penalty(np.array([phi_deg]), problem.previous_phi_deg,

@@ -339,12 +339,12 @@ def one_node_flows(
         Cavity pressure at z = 0.
     """
     open_ = np.isfinite(k)
-    with np.errstate(divide="ignore"):
-        inv_k = np.where(open_, 1.0 / np.where(open_, k, 1.0), 0.0)
+    inv_k = 1.0 / k  # 0 where closed (k = inf)
     head = p_b + rho_c[:, None] * GRAVITY * z  # Δp_k = head_k − P_c
-    big = np.where(open_, head, np.nan)
-    lo = np.nanmin(big, axis=1) - 1.0
-    hi = np.nanmax(big, axis=1) + 1.0
+    # Bracket of P_c: the open openings' heads ± 1 Pa (nan-free min/max: this runs inside
+    # every coupling evaluation of the all-open regime).
+    lo = np.where(open_, head, np.inf).min(axis=1) - 1.0
+    hi = np.where(open_, head, -np.inf).max(axis=1) + 1.0
     lo = np.where(np.isfinite(lo), lo, 0.0)
     hi = np.where(np.isfinite(hi), hi, 0.0)
     # Flow coefficients for inflow (boundary air) and outflow (cavity air) of each opening.

@@ -252,6 +252,8 @@ def coupled_step(nc: NetworkConstants, x: np.ndarray, inp: StepInputs, theta: np
         out_flow[rows], out_rho[rows], out_g[rows], out_tin[rows] = pf.flow, pf.rho_c, g, tin
         if out_m9 is not None and sub.any_all_open:
             out_m9[rows[sub.rows_all_open]] = pf.m_all_open
+            if not whole:  # keep the cavity pressure as the start of the next evaluation
+                setup.p_c_guess[rows] = sub.p_c_guess
         if exact:
             md = modal(lap, q, nc.capacity)
             lam[rows], vec[rows], x_star[rows] = md.lam, md.vec, md.x_steady

@@ -239,6 +239,8 @@ class LumpedModel:
                 same = (regime[:, k + 1] == regime[:, k]) & (or_[:, k + 1] == or_[:, k])
                 guess = np.where(same, 2.0 * res.x_next[:, 4] - x[:, 4], res.x_next[:, 4])
                 slope = np.where(same, res.coupling_slope, np.nan)
+                if setup.any_all_open:  # the all-open cavity pressure changes little too
+                    setup.p_c_guess[:, k + 1] = setup.p_c_guess[:, k]
             x = res.x_next
             xs[:, k + 1] = x
 

@@ -32,6 +32,10 @@ from dsfd.physics.airflow import (
 from dsfd.physics.constants import GRAVITY, R_AIR
 
 _EMPTY4 = np.zeros((0, 4))
+#: Mass-balance tolerance of the regime-9 cavity pressure inside the coupling [kg/s]: the
+#: flows are 1e-3..1e-1 kg/s, so this is 1e-8 relative or better — far below what the
+#: coupling tolerance on T5 can resolve — and saves the last Newton iterations.
+ONE_NODE_TOL_KGS = 1e-10
 
 # Lookup tables indexed by commanded regime (0 unused): positive-direction inlet/outlet,
 # flow law (0 orifice, 1 power law, 2 all open, 3 closed) and realised labels.
@@ -227,7 +231,7 @@ def path_flows(setup: FlowSetup, t5_k: np.ndarray, geom: AirflowGeometry) -> Pat
     if s.any_all_open:
         r9 = s.rows_all_open
         m9, p_c = one_node_flows(s.p_b[r9], s.rho_b[r9], geom.z_m, s.k_all[r9], rho_c[r9],
-                                 dp_t, p_c_start=s.p_c_guess[r9])
+                                 dp_t, p_c_start=s.p_c_guess[r9], tol_kgs=ONE_NODE_TOL_KGS)
         s.p_c_guess[r9] = p_c  # in place: the next evaluation of this step starts here
     else:
         m9 = _EMPTY4
