@@ -23,7 +23,7 @@ from dsfd.config.control import Control
 from dsfd.config.panel import REGIME_OPENINGS, PanelConfig
 from dsfd.control.objective import J_PER_WH, CostTerms, horizon_cost, louver_move_penalty
 from dsfd.physics.coupling import StepInputs
-from dsfd.physics.forcing import FacadeOptics, Forcing, step_inputs
+from dsfd.physics.forcing import FacadeOptics, Forcing, OpticalLoads, step_inputs
 from dsfd.physics.model import LumpedModel
 
 CLOSED = 10
@@ -47,6 +47,10 @@ class ControlProblem:
         Louver angle now (for the move penalty and the SQP start).
     previous_afr : int or None
     previous_or_pct : float or None, [%]
+    heat_offsets_wm2 : ndarray (4,) or None, [W/m2]
+        Calibrated heat-flux offsets on nodes x1..x4 (the self-calibration's input
+        disturbance, :mod:`dsfd.estimation.params`), added to the absorbed short-wave so
+        that the horizon is predicted by the same model the state estimate comes from.
     """
 
     x0: np.ndarray
@@ -56,6 +60,14 @@ class ControlProblem:
     previous_phi_deg: float | None = None
     previous_afr: int | None = None
     previous_or_pct: float | None = None
+    heat_offsets_wm2: np.ndarray | None = None
+
+    def step_inputs(self, loads: OpticalLoads) -> StepInputs:
+        """Model inputs of the horizon for louver loads ``loads``, offsets included."""
+        inp = step_inputs(self.forcing, loads)
+        if self.heat_offsets_wm2 is None or not np.any(self.heat_offsets_wm2):
+            return inp
+        return inp._replace(sources=np.asarray(inp.sources) + self.heat_offsets_wm2)
 
 
 @dataclass(frozen=True)
@@ -102,7 +114,7 @@ class HorizonEvaluator:
         """Model inputs of candidates with louver positions ``angle_idx`` → (C, H, ...)."""
         ld = self.loads
         picked = type(ld)(*(np.asarray(v)[angle_idx] for v in ld))
-        return step_inputs(self.problem.forcing, picked)
+        return self.problem.step_inputs(picked)
 
     def evaluate(self, angle_idx: np.ndarray, regime: np.ndarray,
                  or_: np.ndarray) -> tuple[CostTerms, np.ndarray]:

@@ -19,7 +19,7 @@ from dsfd.config.panel import PanelConfig
 from dsfd.control.baseline import quantise_louver
 from dsfd.control.objective import J_PER_WH, horizon_cost, louver_move_penalty
 from dsfd.control.optimiser import ControlProblem, Decision
-from dsfd.physics.forcing import FacadeOptics, step_inputs
+from dsfd.physics.forcing import FacadeOptics
 from dsfd.physics.model import LumpedModel
 
 #: Finite-difference step of SLSQP in the scaled variables (1 % of each range).
@@ -42,7 +42,7 @@ def optimise_paper_sqp(cfg: PanelConfig, model: LumpedModel, optics: FacadeOptic
     def cost(phi_deg: float, afr: int, or_: float) -> tuple[float, int]:
         loads = optics.loads(problem.forcing, np.radians(phi_deg))
         traj = model.rollout(problem.x0, np.full((1, h), afr), np.full((1, h), or_),
-                             step_inputs(problem.forcing, loads), problem.theta,
+                             problem.step_inputs(loads), problem.theta,
                              coupling_tol_k=cfg.control.coupling_tolerance_k)
         calls["n"] += 1
         j = horizon_cost(traj, dt=model.dt, heating=problem.heating).cost_j[0]

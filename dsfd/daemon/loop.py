@@ -306,6 +306,7 @@ class Controller:
                 problem = ControlProblem(
                     x0=estimate.x_k, forcing=self._forecast(weather.inputs, now_s),
                     theta=self.calibration.theta, heating=heating,
+                    heat_offsets_wm2=self.calibration.offsets,
                     previous_phi_deg=None if current is None else current.phi_deg,
                     previous_afr=None if current is None else current.afr,
                     previous_or_pct=None if current is None else current.or_pct)

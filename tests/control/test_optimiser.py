@@ -85,3 +85,25 @@ def test_no_louver_panel_decides_without_louver_positions():
     problem = random_problems(cfg, 1, seed=2)[0]
     d = opt.decide(problem)
     assert d.phi_deg == 0.0
+
+
+def test_calibrated_heat_offsets_enter_the_horizon_prediction(suwon, mpc):
+    """The offsets the self-calibration fits are heat the model lacks: a positive offset
+    on the louver node must warm the predicted louver and raise the heat gained in
+    heating mode, exactly as the same extra absorbed short-wave would."""
+    import dataclasses
+
+    from dsfd.control.optimiser import HorizonEvaluator
+
+    problem = random_problems(suwon, 1, seed=3)[0]
+    problem = dataclasses.replace(problem, heating=True)
+    warm = dataclasses.replace(problem, heat_offsets_wm2=np.array([0.0, 0.0, 0.0, 50.0]))
+    cand = (np.array([5]), np.array([1]), np.array([1.0]))
+    base_ev = HorizonEvaluator(suwon, mpc.model, mpc.optics, problem, mpc.angles)
+    warm_ev = HorizonEvaluator(suwon, mpc.model, mpc.optics, warm, mpc.angles)
+    base_in, warm_in = base_ev.inputs(cand[0]), warm_ev.inputs(cand[0])
+    np.testing.assert_allclose(np.asarray(warm_in.sources) - np.asarray(base_in.sources),
+                               np.broadcast_to([0.0, 0.0, 0.0, 50.0], base_in.sources.shape))
+    base, _ = base_ev.evaluate(*cand)
+    hot, _ = warm_ev.evaluate(*cand)
+    assert hot.cost_j[0] < base.cost_j[0]  # more heat into the room: lower heating cost
