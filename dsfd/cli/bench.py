@@ -31,8 +31,7 @@ def _bench_plant_velocity(args: argparse.Namespace) -> dict[str, float]:
     from dsfd.sim.bench_plant import DEFAULT_WEATHER
     from dsfd.sim.bench_velocity import bench_plant_velocity
 
-    return bench_plant_velocity(load_panel(args.config), seeds=args.seeds,
-                                days=3.0 if args.days is None else args.days,
+    return bench_plant_velocity(load_panel(args.config), seeds=args.seeds, days=args.days,
                                 weather=args.weather or DEFAULT_WEATHER)
 
 
@@ -96,7 +95,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--days", type=float, default=None,
                    help="simulated duration where the target simulates (plant: 3; daemon: "
                    "10,000 one-minute cycles; paper-tables: 3 scored days after the "
-                   "training day)")
+                   "training day; plant-velocity: from the record's second day to its end)")
     p.add_argument("--seed", type=int, default=0, help="seed of the target's randomness")
     p.add_argument("--cases", type=int, default=200,
                    help="control: random decision problems judged against brute force")

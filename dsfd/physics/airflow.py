@@ -351,10 +351,10 @@ def one_node_flows(
     c_in = np.sqrt(2.0 * rho_b * inv_k)
     c_out = np.sqrt(2.0 * rho_c[:, None] * inv_k)
 
-    def total(pc: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Σṁ and dΣṁ/dP_c at cavity pressure ``pc`` for batch ``rows``."""
-        dp = head[rows] - pc[:, None]
-        coef = np.where(dp > 0, c_in[rows], c_out[rows])
+    def total(pc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Σṁ and dΣṁ/dP_c at cavity pressure ``pc``."""
+        dp = head - pc[:, None]
+        coef = np.where(dp > 0, c_in, c_out)
         mag = np.abs(dp)
         if mag.min() >= dp_t:  # usual case: plain orifice law, no regularisation needed
             root = np.sqrt(mag)
@@ -370,21 +370,21 @@ def one_node_flows(
     if p_c_start is not None:
         usable = np.isfinite(p_c_start) & (p_c_start > lo) & (p_c_start < hi)
         pc = np.where(usable, p_c_start, pc)
-    rows = np.arange(len(pc))
+    # The whole batch iterates together (batches are small; converged rows stay put), which
+    # is cheaper than re-indexing the unfinished rows every iteration.
     for _ in range(max_iter):
-        if rows.size == 0:
-            break
-        s, ds = total(pc[rows], rows)
+        s, ds = total(pc)
         # Bracket update: s > 0 means P_c is too low.
-        lo[rows] = np.where(s > 0, pc[rows], lo[rows])
-        hi[rows] = np.where(s > 0, hi[rows], pc[rows])
-        with np.errstate(divide="ignore", invalid="ignore"):
-            newton = pc[rows] - s / ds
-        inside = (newton > lo[rows]) & (newton < hi[rows]) & np.isfinite(newton)
-        nxt = np.where(inside, newton, 0.5 * (lo[rows] + hi[rows]))
-        done = (np.abs(s) <= tol_kgs) | (hi[rows] - lo[rows] <= 1e-13 * (1 + np.abs(pc[rows])))
-        pc[rows] = np.where(done, pc[rows], nxt)
-        rows = rows[~done]
+        too_low = s > 0
+        lo = np.where(too_low, pc, lo)
+        hi = np.where(too_low, hi, pc)
+        done = (np.abs(s) <= tol_kgs) | (hi - lo <= 1e-13 * (1 + np.abs(pc)))
+        if done.all():
+            break
+        # ds < 0 wherever an opening is open; elsewhere the step falls outside → bisect.
+        newton = pc - s / np.where(ds < 0, ds, -1.0)
+        inside = (newton > lo) & (newton < hi)
+        pc = np.where(done, pc, np.where(inside, newton, 0.5 * (lo + hi)))
     dp = head - pc[:, None]
     m_dot = regularised_power(dp, np.where(dp > 0, c_in, c_out), 0.5, dp_t)
     return m_dot, pc

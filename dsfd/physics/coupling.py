@@ -106,6 +106,9 @@ class StepResult(NamedTuple):
     converged : bool
     coupling_slope : [-]
         Last slope of h(T5) = Φ(T5) − T5 (warm start of the next step; NaN if unknown).
+    t5_ahead_k : [K]
+        x5 at the end of a further step under this step's frozen network (warm start of
+        the next coupling under unchanged controls).
     """
 
     x_next: np.ndarray
@@ -120,6 +123,7 @@ class StepResult(NamedTuple):
     evaluations: np.ndarray
     converged: np.ndarray
     coupling_slope: np.ndarray
+    t5_ahead_k: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -266,13 +270,19 @@ def coupled_step(nc: NetworkConstants, x: np.ndarray, inp: StepInputs, theta: np
     t0 = x[:, X5] if t5_guess is None else t5_guess
     fp = solve_fixed_point(phi, t0, tol=nc.tol_k, max_evals=nc.max_evals, slope=slope_guess)
     if exact:
-        r = 1.0 / np.sqrt(nc.capacity)
-        x_next, x_mean, _ = modal_step(Modal(lam, vec, r, x_star), x, nc.dt)
+        md = Modal(lam, vec, 1.0 / np.sqrt(nc.capacity), x_star)
+        x_next, x_mean, _ = modal_step(md, x, nc.dt)
+        # The next step's x5 if its network stayed this one: the warm start of the next
+        # coupling under unchanged controls (the network changes only with the weather
+        # and the slow radiative linearisation, so this lands close to the next root).
+        ahead = modal_state(md, x_next, nc.dt, node=X5)
+    else:
+        ahead = 2.0 * x_next[:, X5] - x[:, X5]
     m9 = out_m9[setup.rows_all_open] if out_m9 is not None else np.zeros((0, 4))
     flow = opening_flows(setup, PathFlow(out_flow, out_rho, m9))
     bnd = bnd0._replace(g_adv=out_g, t_inflow=out_tin)
     return _result(nc, x_next, x_mean, flow, inp, bnd, fp.evaluations, fp.converged,
-                   slope=fp.slope)
+                   slope=fp.slope, t5_ahead=ahead)
 
 
 def _ping_pong(nc: NetworkConstants, x, inp, lap0, q0, bnd0, setup) -> StepResult:
@@ -303,7 +313,7 @@ def _ping_pong(nc: NetworkConstants, x, inp, lap0, q0, bnd0, setup) -> StepResul
 
 
 def _result(nc: NetworkConstants, x_next, x_mean, flow, inp, bnd, evals, conv,
-            air=None, slope=None) -> StepResult:
+            air=None, slope=None, t5_ahead=None) -> StepResult:
     a_f = nc.geom.facade_area_m2
     x3 = x_mean[:, 2]
     q_cv_rd = a_f * (bnd.h_in * (x3 - inp.t_in_k) + bnd.h_rad_in * (x3 - inp.t_mrt_k))
@@ -320,4 +330,5 @@ def _result(nc: NetworkConstants, x_next, x_mean, flow, inp, bnd, evals, conv,
         evaluations=evals,
         converged=conv,
         coupling_slope=np.full(x_next.shape[0], np.nan) if slope is None else slope,
+        t5_ahead_k=x_next[:, X5] if t5_ahead is None else t5_ahead,
     )

@@ -232,12 +232,12 @@ class LumpedModel:
             res = coupled_step(nc, x, inp.at((slice(None), k)), theta[:, k],
                                setup.at((slice(None), k)), guess, slope)
             cols.append(res)
-            # Warm start: under unchanged controls the cavity air changes by about as much
-            # as in the last step and the coupling keeps its slope; after a control change
+            # Warm start: under unchanged controls the cavity air moves as this step's
+            # network predicts and the coupling keeps its slope; after a control change
             # start from the state.
             if k + 1 < horizon:
                 same = (regime[:, k + 1] == regime[:, k]) & (or_[:, k + 1] == or_[:, k])
-                guess = np.where(same, 2.0 * res.x_next[:, 4] - x[:, 4], res.x_next[:, 4])
+                guess = np.where(same, res.t5_ahead_k, res.x_next[:, 4])
                 slope = np.where(same, res.coupling_slope, np.nan)
                 if setup.any_all_open:  # the all-open cavity pressure changes little too
                     setup.p_c_guess[:, k + 1] = setup.p_c_guess[:, k]
