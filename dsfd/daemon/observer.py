@@ -102,7 +102,8 @@ class StateObserver:
                                   theta)
             if np.all(np.isfinite(res.x_next)):
                 x_pred = res.x_next[0]
-        x = fill_state(y, x_pred, has_louver=self.has_louver)
+        x = fill_state(y, x_pred, has_louver=self.has_louver,
+                       gain=self.model.cfg.calibration.measurement_gain)
         predicted = np.isfinite(x[:5]) & ~measured
         self._age = np.where(measured, 0, np.where(predicted, self._age + 1, _NEVER))
         if not self.has_louver and measured[4]:

@@ -1,9 +1,11 @@
-"""State update from the measurements: x1..x5 as measured, x6 by the quasi-steady observer.
+"""State update from the measurements: x1..x5 from the readings, x6 by the quasi-steady observer.
 
 Each step the model predicts x_{k+1} from the current estimate x̂_k; the estimate is then
-replaced by the measurements where they exist:
+corrected by the measurements where they exist:
 
-* x1..x5: the measured value; a missing (NaN) or flagged value keeps the prediction;
+* x1..x5: the measured value (``calibration.measurement_gain`` 1, the paper's update), or
+  the prediction moved towards it by that gain (a fixed-gain filter of sensor noise); a
+  missing (NaN) or flagged value keeps the prediction;
 * x6 (DGU gap gas, never measured): (x2 + x3)/2 when both panes are measured — exact at
   quasi-steady state because node 6 sees both panes through the same h_ca4 and its time
   constant (≈ 1.6 s) is far below the step (errata E19.1); otherwise the prediction;
@@ -71,17 +73,23 @@ def spike_mask(y: np.ndarray, threshold: float) -> np.ndarray:
     return out
 
 
-def fill_state(y5: np.ndarray, x_pred: np.ndarray, *, has_louver: bool) -> np.ndarray:
-    """Measurement update: measured x1..x5 replace the prediction, x6 by the observer.
+def fill_state(y5: np.ndarray, x_pred: np.ndarray, *, has_louver: bool,
+               gain: float = 1.0) -> np.ndarray:
+    """Measurement update: measured x1..x5 correct the prediction, x6 by the observer.
 
     Parameters
     ----------
     y5 : array (..., 5), [K]
         Measured x1..x5, NaN where missing or flagged.
     x_pred : array (..., 6), [K]
-        Model prediction (broadcast against ``y5``).
+        Model prediction (broadcast against ``y5``); NaN where there is none.
     has_louver : bool
         False: an unmeasured x4 follows x5.
+    gain : float, [-]
+        Weight of the measurement: x̂ = x_pred + gain·(y − x_pred). 1 takes the reading
+        as it is (the paper's state update); below 1 the update is a fixed-gain
+        (steady-state Kalman) filter that averages white sensor noise against the model's
+        prediction. Without a prediction the reading is taken as it is.
 
     Returns
     -------
@@ -92,9 +100,13 @@ def fill_state(y5: np.ndarray, x_pred: np.ndarray, *, has_louver: bool) -> np.nd
                                                              (*y5.shape[:-1], 6))), float)
     meas = np.broadcast_to(y5, (*x.shape[:-1], 5))
     ok = np.isfinite(meas)
-    x[..., :5] = np.where(ok, meas, x[..., :5])
+    pred = x[..., :5]
+    if gain < 1.0:
+        with np.errstate(invalid="ignore"):
+            meas = np.where(np.isfinite(pred), pred + gain * (meas - pred), meas)
+    x[..., :5] = np.where(ok, meas, pred)
     panes = ok[..., X2] & ok[..., X3]
-    x[..., X6] = np.where(panes, 0.5 * (meas[..., X2] + meas[..., X3]), x[..., X6])
+    x[..., X6] = np.where(panes, 0.5 * (x[..., X2] + x[..., X3]), x[..., X6])
     if not has_louver:
         x[..., X4] = np.where(ok[..., X4], x[..., X4], x[..., X5])
     return x
@@ -130,7 +142,8 @@ def observer_step(model: LumpedModel, steps: StepData, k: int, x_hat: np.ndarray
     x_hat = np.broadcast_to(np.asarray(x_hat, float), (nb, 6))
     res = model.step(x_hat, np.full(nb, steps.regime[k]), steps.or_[k], inp,
                      theta[:, :N_PARAMS])
-    x_new = fill_state(y_next, res.x_next, has_louver=model.cfg.louver is not None)
+    x_new = fill_state(y_next, res.x_next, has_louver=model.cfg.louver is not None,
+                       gain=model.cfg.calibration.measurement_gain)
     return x_new, res.x_next, res.v_cav_ms
 
 
