@@ -24,7 +24,7 @@ YAML shape (every key optional; the defaults suit a 1-minute controller cycle)::
       offset_tracking_s: 600      # offsets follow each measurement between fits (τ)
       innovation_smoothing_s: 300 # ... through a low-pass on the innovations
       broyden_updates: 1          # Broyden Jacobian updates between finite differences
-      measurement_gain: 1.0       # state update: weight of a reading against the prediction
+      measurement_gain: [1, 1, 1, 1, 1]  # state update: weight of a reading of x1..x5
       spike_threshold_k: 3.0      # isolated temperature jumps treated as missing
       fixed: []                   # parameters never calibrated on this panel
 
@@ -114,11 +114,12 @@ class Calibration:
         300.0, doc="Time constant of the low-pass on the innovations the offsets follow "
         "(white sensor noise averages out, persistent model errors pass)", unit="s", ge=0,
         le=86400)
-    measurement_gain: float = setting(
-        1.0, doc="State update: weight of a new reading of x1..x5 against the model's "
-        "one-step prediction (1 = take the reading as it is, the paper's update; lower "
-        "filters white sensor noise, the steady-state Kalman gain of a sensor noise σ_y and "
-        "a model error σ_m is about σ_m/σ_y for σ_m ≪ σ_y)", gt=0, le=1)
+    measurement_gain: tuple[float, ...] = setting(
+        (1.0, 1.0, 1.0, 1.0, 1.0), doc="State update: weight of a new reading of x1..x5 (one "
+        "per state) against the model's one-step prediction (1 = take the reading as it is, "
+        "the paper's update; lower filters white sensor noise, the steady-state Kalman gain "
+        "of a sensor noise σ_y and a model error σ_m is about σ_m/σ_y for σ_m ≪ σ_y, so only "
+        "the slow panes x2, x3 gain from it)", gt=0, le=1)
     spike_threshold_k: float = setting(
         3.0, doc="A temperature sample that jumps by more than this from both neighbours "
         "(which agree) is treated as missing", unit="K", gt=0, le=100)
@@ -131,6 +132,9 @@ class Calibration:
         for name in self.fixed:
             if name not in _NAMES:
                 out.append(Problem("fixed", name, f"unknown parameter; known: {', '.join(_NAMES)}"))
+        if len(self.measurement_gain) != 5:
+            out.append(Problem("measurement_gain", list(self.measurement_gain),
+                               "need one gain per measured state x1..x5"))
         if self.min_window_h > self.window_h:
             out.append(Problem("min_window_h", self.min_window_h,
                                f"longer than window_h {self.window_h} h"))

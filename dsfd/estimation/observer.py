@@ -74,7 +74,7 @@ def spike_mask(y: np.ndarray, threshold: float) -> np.ndarray:
 
 
 def fill_state(y5: np.ndarray, x_pred: np.ndarray, *, has_louver: bool,
-               gain: float = 1.0) -> np.ndarray:
+               gain: float | tuple[float, ...] | np.ndarray = 1.0) -> np.ndarray:
     """Measurement update: measured x1..x5 correct the prediction, x6 by the observer.
 
     Parameters
@@ -85,8 +85,8 @@ def fill_state(y5: np.ndarray, x_pred: np.ndarray, *, has_louver: bool,
         Model prediction (broadcast against ``y5``); NaN where there is none.
     has_louver : bool
         False: an unmeasured x4 follows x5.
-    gain : float, [-]
-        Weight of the measurement: x̂ = x_pred + gain·(y − x_pred). 1 takes the reading
+    gain : float or array (5,), [-]
+        Weight of the measurement (per state): x̂ = x_pred + gain·(y − x_pred). 1 takes the reading
         as it is (the paper's state update); below 1 the update is a fixed-gain
         (steady-state Kalman) filter that averages white sensor noise against the model's
         prediction. Without a prediction the reading is taken as it is.
@@ -101,7 +101,8 @@ def fill_state(y5: np.ndarray, x_pred: np.ndarray, *, has_louver: bool,
     meas = np.broadcast_to(y5, (*x.shape[:-1], 5))
     ok = np.isfinite(meas)
     pred = x[..., :5]
-    if gain < 1.0:
+    gain = np.asarray(gain, float)
+    if np.any(gain < 1.0):
         with np.errstate(invalid="ignore"):
             meas = np.where(np.isfinite(pred), pred + gain * (meas - pred), meas)
     x[..., :5] = np.where(ok, meas, pred)

@@ -42,3 +42,10 @@ def test_fixed_gain_filter_has_the_exponential_smoothing_variance():
     errors = np.array(errors[100:])
     expected = gain / (2.0 - gain) * sigma ** 2
     np.testing.assert_allclose(errors.var(axis=0), expected, rtol=0.08)
+
+
+def test_gain_per_state():
+    pred = np.full(6, 290.0)
+    y = np.full(5, 291.0)
+    x = fill_state(y, pred, has_louver=True, gain=(1.0, 0.5, 0.25, 1.0, 1.0))
+    np.testing.assert_allclose(x[:5], [291.0, 290.5, 290.25, 291.0, 291.0])
