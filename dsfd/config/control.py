@@ -75,11 +75,15 @@ class Control:
         gt=0, le=0.1)
     full_candidates: int = setting(
         8, doc="Screened candidates evaluated at full resolution", ge=1, le=500)
+    louver_neighbours: int = setting(
+        2, doc="Louver positions on either side of the best that are re-evaluated at full "
+        "resolution at its regime and opening (the screening can misrank neighbouring "
+        "angles by a tenth of a per cent)", ge=0, le=10)
     finalist_margin_pct: float = setting(
-        1.0, doc="The best screened candidate of every damper set within this much of the "
-        "screened best is also evaluated at full resolution (the coarse screening step "
-        "distorts costs by a fraction of a per cent, enough to misrank near a regime "
-        "switch)", unit="%", ge=0, le=100)
+        20.0, doc="The best screened candidate of every damper set within this much of the "
+        "screened best (relative to max(|J|, 1 Wh)) is also evaluated at full resolution: the "
+        "coarse screening step distorts costs by up to a few per cent after a regime change "
+        "(2.2 % seen), enough to misrank damper sets", unit="%", ge=0, le=1000)
     louver_move_penalty_wh: float = setting(
         0.0, doc="Cost added per 18° louver step moved (motor wear)", unit="Wh", ge=0)
     time_budget_s: float = setting(

@@ -40,12 +40,17 @@ def test_matches_brute_force_and_never_loses_to_paper_sqp(suwon, mpc):
         assert d.cost_j <= sqp.cost_j + 1e-6 * abs(sqp.cost_j) + 1e-3
 
 
-def test_near_tie_between_damper_sets_is_decided_at_full_resolution(suwon, mpc):
-    """A cooling case where all damper sets lie within 0.2 % of each other: the coarse
-    screening ranked exhaust (5) at full opening below the eight finalists, and the
-    optimiser settled 0.23 % above brute force before every near set's best was also
-    evaluated at full resolution."""
-    problem = random_problems(suwon, 171, seed=0)[170]
+@pytest.mark.parametrize(("seed", "index"), [(0, 170), (1, 73), (2, 156)])
+def test_damper_sets_misranked_by_the_screening_are_decided_at_full_resolution(
+        suwon, mpc, seed, index):
+    """Two cooling cases from the benchmark's random problems. (0, 170): every damper set
+    within 0.2 % of the others, exhaust (5) at full opening ranked outside the eight
+    finalists, 0.23 % above brute force. (1, 73): the 300 s screening step put the
+    all-open set 2.2 % ahead of supply through the cavity, which wins by 4.6 % at full
+    resolution; both failed before the best of every damper set near the screened best
+    was also evaluated at full resolution. (2, 156): the screening preferred the louver at
+    0° to −18° (0.14 % worse), fixed by re-evaluating the best's louver neighbours."""
+    problem = random_problems(suwon, index + 1, seed=seed)[index]
     ref = brute_force(suwon, mpc.model, mpc.optics, problem, or_step_pct=1.0)
     d = mpc.decide(problem)
     assert _gap_pct(d.cost_j, ref) <= 0.1, (d, ref)
