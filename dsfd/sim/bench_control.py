@@ -62,7 +62,9 @@ def bench_control(panel: Path | None = None, *, cases: int = 200, seed: int = 0,
         "speedup_vs_sqp_median": float(np.median(t_sqp_a) / np.median(t_mpc_a)),
         "gap_vs_bruteforce_pct_max": float(np.max(gaps)),
         "gap_vs_bruteforce_pct_mean": float(np.mean(gaps)),
-        "mpc_better_than_bruteforce_share": float(np.mean(np.array(gaps) < -1e-9)),
+        # Below −1e-4 %: a real win of the continuous OR over the 1 % grid, not the
+        # ~1e-6 % difference of the MPC's looser coupling tolerance (control settings).
+        "mpc_better_than_bruteforce_share": float(np.mean(np.array(gaps) < -1e-4)),
         "sqp_worse_than_mpc_share": float(np.mean(worse > 1e-6)),
         "sqp_worse_than_mpc_pct_median": float(np.median(worse[worse > 1e-6]))
         if np.any(worse > 1e-6) else 0.0,
