@@ -24,7 +24,7 @@ import math
 from dsfd.config.panel import PanelConfig
 from dsfd.sim.plant_config import TrueParameters
 from dsfd.sim.protocol import PAPER_REGIMES
-from dsfd.sim.replay import load_weather
+from dsfd.sim.replay import at_site, load_weather
 from dsfd.sim.truth_run import run_truth, velocity_table
 
 #: The paper's Table 1 range of mean measured cavity speeds [m/s] (2.76 … 14.10 cm/s,
@@ -64,8 +64,9 @@ def bench_plant_velocity(cfg: PanelConfig, *, seeds: int = 10, days: float | Non
     """
     series = load_weather(weather)
     hours = None if days is None else 24.0 * days
-    first = series.coverage_s[0] + start_day * 86400.0
-    start_s = float(-(-first // 60.0) * 60.0)  # first whole minute of that day
+    # Days of the record as replayed at the panel's site (run_truth replays it there and
+    # aligns the start to a whole minute).
+    start_s = at_site(series, cfg).coverage_s[0] + start_day * 86400.0
     p = cfg.parameters
     centre = TrueParameters(h_multipliers=(1.0,) * 6, f=F_CENTRE, c=p.c.default,
                             n=p.n.default)
