@@ -22,6 +22,7 @@ import numpy as np
 from dsfd.config.control import Control
 from dsfd.config.panel import REGIME_OPENINGS, PanelConfig
 from dsfd.control.objective import J_PER_WH, CostTerms, horizon_cost, louver_move_penalty
+from dsfd.estimation.params import with_offsets
 from dsfd.physics.coupling import StepInputs
 from dsfd.physics.forcing import FacadeOptics, Forcing, OpticalLoads, step_inputs
 from dsfd.physics.model import LumpedModel
@@ -65,9 +66,9 @@ class ControlProblem:
     def step_inputs(self, loads: OpticalLoads) -> StepInputs:
         """Model inputs of the horizon for louver loads ``loads``, offsets included."""
         inp = step_inputs(self.forcing, loads)
-        if self.heat_offsets_wm2 is None or not np.any(self.heat_offsets_wm2):
+        if self.heat_offsets_wm2 is None:
             return inp
-        return inp._replace(sources=np.asarray(inp.sources) + self.heat_offsets_wm2)
+        return with_offsets(inp, self.heat_offsets_wm2)
 
 
 @dataclass(frozen=True)
@@ -220,9 +221,8 @@ class MpcOptimiser:
         # Stage 3: the louver positions next to the best (the screening can misrank
         # neighbouring angles by a tenth of a per cent) and parabolic refinement of the
         # best pair's OR, one batch per round.
+        na, nr, new = _louver_neighbours(best, n_a, ctl.louver_neighbours, fa, fr, fo)
         for round_ in range(max(1, ctl.or_refine_rounds)):
-            na, nr, new = _louver_neighbours(best, n_a, ctl.louver_neighbours, fa, fr, fo) \
-                if round_ == 0 else (np.zeros(0, int),) * 2 + (np.zeros(0),)
             same = (fa == best.angle_idx) & (fr == best.regime)
             spread = float(np.ptp(terms.cost_j[same])) if same.sum() > 1 else 0.0
             if (round_ < ctl.or_refine_rounds and best.regime != CLOSED
@@ -238,6 +238,7 @@ class MpcOptimiser:
             best = best.better(_Best.of(t3, l3, na, nr, new))
             fa, fr, fo = (np.concatenate(v) for v in ((fa, na), (fr, nr), (fo, new)))
             terms = CostTerms(*(np.concatenate(v) for v in zip(terms, t3, strict=True)))
+            na, nr, new = np.zeros(0, int), np.zeros(0, int), np.zeros(0)  # neighbours: once
         trace.append(f"stage 3: louver neighbours and OR refined, best "
                      f"{best.describe(angles)}")
         return best.decision(angles, method="mpc",

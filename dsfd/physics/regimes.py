@@ -102,11 +102,10 @@ class FlowSetup(NamedTuple):
 
     def reshape(self, shape: tuple[int, ...]) -> FlowSetup:
         """Give the flat batch the leading ``shape`` (trailing opening axes kept)."""
-        return FlowSetup(*(
-            v.reshape(*shape, *v.shape[1:])
-            if isinstance(v, np.ndarray) and k != "rows_all_open" else v
-            for k, v in zip(self._fields, self, strict=True)
-        ))
+        return FlowSetup._make([
+            v.reshape(*shape, *v.shape[1:]) if per_row and isinstance(v, np.ndarray) else v
+            for v, per_row in zip(self, _PER_ROW, strict=True)
+        ])
 
     def _relabel(self) -> FlowSetup:
         """Recompute the all-open row index after selecting rows (1-D batches only)."""
