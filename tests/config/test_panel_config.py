@@ -81,6 +81,20 @@ def test_cross_field_checks():
     assert "louver.step_deg" in issues
 
 
+def test_observer_gains_need_one_per_measured_state_within_0_1():
+    d = _suwon_dict()
+    d["calibration"] = {"measurement_gain": [1, 0.3]}
+    issues = _issues(d)
+    assert "calibration.measurement_gain" in issues
+    assert "[1.0, 0.3]" in issues["calibration.measurement_gain"]
+    assert "one gain per measured state" in issues["calibration.measurement_gain"]
+    d["calibration"] = {"measurement_gain": [1, 0.3, 0.3, 1, 1.5]}
+    assert "1.5" in _issues(d)["calibration.measurement_gain[4]"]
+    d["calibration"] = {"measurement_gain": [1, 0.3, 0.3, 1, 1]}
+    cfg = panel_from_mapping(d, source="test.yaml")
+    assert cfg.calibration.measurement_gain == (1.0, 0.3, 0.3, 1.0, 1.0)
+
+
 def test_booleans_are_not_numbers_and_ints_are_not_strings():
     d = _suwon_dict()
     d["model"]["step_s"] = True
