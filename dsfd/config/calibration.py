@@ -7,6 +7,7 @@ YAML shape (every key optional; the defaults suit a 1-minute controller cycle)::
       forgetting_factor: 0.7      # λ per hour of age: weight λ^(age/1 h)
       horizon_steps: 15           # lead times 1..15 of the multi-step residual
       start_stride_steps: 4       # a rollout starts every 4th step of the window
+      start_smoothing_s: 480      # its measured start state smoothed over ±4 min
       update_interval_s: 600      # one on-line update every 10 min
       max_nfev: 8                 # model evaluations per on-line update
       offline_max_nfev: 40        # ... for the off-line batch fit
@@ -30,7 +31,7 @@ YAML shape (every key optional; the defaults suit a 1-minute controller cycle)::
 
 Errors name the key path (``calibration.window_h``). References: the paper's Eq. 3; MHE
 arrival cost: Rao, Rawlings & Mayne (2003); soft-L1 loss: Triggs et al. (2000) and the
-``scipy.optimize.least_squares`` documentation.
+``scipy.optimize.least_squares`` documentation; start smoothing: Savitzky & Golay (1964).
 """
 
 from __future__ import annotations
@@ -61,6 +62,14 @@ class Calibration:
     start_stride_steps: int = setting(
         4, doc="A prediction rollout starts from the observed state every N-th step",
         ge=1, le=120)
+    start_smoothing_s: float = setting(
+        480.0, doc="Measured temperatures a rollout of the fit starts from are smoothed over "
+        "this span centred on the start (quadratic Savitzky-Golay over the odd number of "
+        "samples nearest to it: 9 at 1-minute data, none at 10-minute data; only where the "
+        "controls stay constant and every sample is there; 0 = raw readings). A rollout "
+        "that starts from a noisy reading is fitted best by a model that forgets its start "
+        "fast, which pushed h_in and h_ca4 to their upper bounds on-line "
+        "(errors-in-variables bias)", unit="s", ge=0, le=3600)
     update_interval_s: float = setting(
         600.0, doc="Time between on-line updates", unit="s", ge=0, le=86400)
     min_window_h: float = setting(
@@ -126,6 +135,11 @@ class Calibration:
     fixed: tuple[str, ...] = setting(
         (), doc="Parameters held at their defaults on this panel (in addition to those the "
         "panel cannot excite)")
+
+    def smoothing_samples(self, step_s: float) -> int:
+        """Odd number of samples of :attr:`start_smoothing_s` at sampling interval
+        ``step_s`` [s] (1 = no smoothing)."""
+        return 2 * round(self.start_smoothing_s / (2.0 * step_s)) + 1
 
     def check(self) -> list[Problem]:
         out = []

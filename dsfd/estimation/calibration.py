@@ -61,7 +61,8 @@ def make_problem(model: LumpedModel, steps: StepData, x_hat: np.ndarray, x_pred:
         else forgetting_per_h,
         temperature_scale_k=settings.temperature_scale_k,
         velocity_scale_ms=settings.velocity_scale_ms,
-        spike_threshold_k=settings.spike_threshold_k)
+        spike_threshold_k=settings.spike_threshold_k,
+        start_smoothing=settings.smoothing_samples(steps.step_s))
 
 
 def window_start(time_s: np.ndarray, end_row: int, window_h: float) -> int:

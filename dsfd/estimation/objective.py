@@ -170,6 +170,7 @@ def window_problem(model: LumpedModel, steps: StepData, x_hat: np.ndarray,
                    x_pred: np.ndarray, *, horizon: int, stride: int,
                    forgetting_per_h: float, temperature_scale_k: float,
                    velocity_scale_ms: float, spike_threshold_k: float,
+                   start_smoothing: int = 1,
                    fit_outputs: tuple[str, ...] = OUTPUTS) -> WindowProblem:
     """Prepare the Eq. 3 residual of a window.
 
@@ -189,6 +190,9 @@ def window_problem(model: LumpedModel, steps: StepData, x_hat: np.ndarray,
     spike_threshold_k : float
         Isolated spikes of the measured temperatures are dropped (targets) or replaced by
         the prediction (start states), see :func:`dsfd.estimation.observer.spike_mask`.
+    start_smoothing : int
+        Samples of the centred smoothing of the measured start states (odd; 1 = raw), see
+        :func:`smoothed_starts`.
     fit_outputs : tuple of str
         Outputs that enter the objective (subset of :data:`OUTPUTS`).
 
@@ -204,6 +208,9 @@ def window_problem(model: LumpedModel, steps: StepData, x_hat: np.ndarray,
     x_start = np.array(x_hat[starts], float)
     bad_start = spikes[starts]
     x_start[:, :5] = np.where(bad_start, x_pred[starts, :5], x_start[:, :5])
+    if start_smoothing > 1:
+        x_start[:, :4] = smoothed_starts(steps, y[:, :4], starts, x_start[:, :4],
+                                         start_smoothing)
 
     lead = np.arange(horizon)
     step_idx = starts[:, None] + lead[None, :]                      # (S, H) step of lead i+1
@@ -228,3 +235,65 @@ def window_problem(model: LumpedModel, steps: StepData, x_hat: np.ndarray,
                          or_=steps.or_[clamped], inputs=inputs,
                          target=np.where(mask, target, 0.0), weight=weight, mask=mask,
                          regimes=steps.regime[covered], horizon=horizon, scale=scale)
+
+
+def savgol_centre_weights(width: int) -> np.ndarray:
+    """Weights of the centre value of a quadratic least-squares fit over ``width`` (odd)
+    equally spaced samples (Savitzky & Golay 1964):
+    c_k = (3(3m² + 3m − 1) − 15k²) / ((2m + 3)(2m + 1)(2m − 1)), k = −m … m."""
+    m = (width - 1) // 2
+    k = np.arange(-m, m + 1, dtype=float)
+    return (3.0 * (3 * m * m + 3 * m - 1) - 15.0 * k * k) / ((2 * m + 3) * (2 * m + 1)
+                                                          * (2 * m - 1))
+
+
+def smoothed_starts(steps: StepData, y: np.ndarray, starts: np.ndarray, raw: np.ndarray,
+                    width: int) -> np.ndarray:
+    """Start temperatures [K] smoothed over ``width`` rows centred on each start.
+
+    Why: the fit's rollouts start from measured states. Sensor noise in a start value is
+    an error in the regressors (errors-in-variables): the least-squares fit then prefers
+    parameters that make the model forget its start quickly (larger couplings of the slow
+    nodes), a bias that the on-line arrival cost accumulates update after update until the
+    parameter sits on its bound. A centred quadratic fit over 9 samples cuts the noise
+    variance of the start to a quarter and keeps the trend of nodes whose time constants
+    are many samples long: the panes and the louver (x1…x4). The cavity air x5 is left
+    raw: it follows the weather within seconds, so smoothing would blur it more than the
+    noise does, and a rollout forgets its start value as fast. The window lies in the
+    past, so centring costs nothing.
+
+    A start keeps its ``raw`` value where the smoothing window leaves the record, where a
+    sample in it is missing or flagged (NaN in ``y``), or where the commanded regime,
+    opening or louver angle changes inside it (a fast transient is not noise).
+
+    Parameters
+    ----------
+    steps : StepData
+        The window (rows 0 … n).
+    y : array (n + 1, N), [K]
+        Measured temperatures with flagged samples set to NaN.
+    starts : array (S,), int
+        Start rows.
+    raw : array (S, N), [K]
+        Unsmoothed start states.
+    width : int
+        Samples in the smoothing window (odd, ≥ 3).
+    """
+    m = (width - 1) // 2
+    n = steps.n_steps
+    out = np.array(raw, float)
+    inside = (starts - m >= 0) & (starts + m <= n)
+    if not inside.any():
+        return out
+    s = starts[inside]
+    rows = s[:, None] + np.arange(-m, m + 1)[None, :]              # (S', width)
+    ctl = rows[:, :-1]                                              # steps inside the window
+    steady = np.ones(s.size, bool)
+    for series in (steps.regime, steps.or_, steps.phi_rad):
+        steady &= np.all(series[ctl] == series[ctl[:, :1]], axis=1)
+    steady &= np.all(steps.valid[ctl], axis=1)
+    window = y[rows]                                                # (S', width, N)
+    smooth = np.einsum("k,skj->sj", savgol_centre_weights(width), window)
+    use = steady[:, None] & np.isfinite(smooth)
+    out[inside] = np.where(use, smooth, out[inside])
+    return out
