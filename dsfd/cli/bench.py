@@ -28,11 +28,10 @@ def _bench_plant(args: argparse.Namespace) -> dict[str, float]:
 
 
 def _bench_plant_velocity(args: argparse.Namespace) -> dict[str, float]:
-    from dsfd.sim.bench_plant import DEFAULT_WEATHER
     from dsfd.sim.bench_velocity import bench_plant_velocity
 
     return bench_plant_velocity(load_panel(args.config), seeds=args.seeds, days=args.days,
-                                weather=args.weather or DEFAULT_WEATHER)
+                                weather=args.weather)
 
 
 def _bench_daemon(args: argparse.Namespace) -> dict[str, float]:
@@ -95,7 +94,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--days", type=float, default=None,
                    help="simulated duration where the target simulates (plant: 3; daemon: "
                    "10,000 one-minute cycles; paper-tables: 3 scored days after the "
-                   "training day; plant-velocity: from the record's second day to its end)")
+                   "training day; plant-velocity: the paper's 8-11 Dec 2008, or with "
+                   "--weather from the record's second day to its end)")
     p.add_argument("--seed", type=int, default=0, help="seed of the target's randomness")
     p.add_argument("--cases", type=int, default=200,
                    help="control: random decision problems judged against brute force")

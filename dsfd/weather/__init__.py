@@ -4,6 +4,7 @@ Readers return UTC interval midpoints; :func:`resample` gives model-step midpoin
 (errata E19.2); :func:`shift_to_site` replays foreign weather at the same local solar time.
 """
 
+from dsfd.weather.daily import read_kma_daily
 from dsfd.weather.readers import (
     BUNDLED_WEATHER,
     bundled_weather,
@@ -28,6 +29,7 @@ __all__ = [
     "bundled_weather",
     "fill_short_gaps",
     "read_epw",
+    "read_kma_daily",
     "read_rmis",
     "read_surfrad",
     "read_tmy3",

@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from dsfd.weather.daily import read_kma_daily
 from dsfd.weather.series import (
     CHANNELS,
     IRRADIANCE_CHANNELS,
@@ -36,6 +37,7 @@ FloatArray = NDArray[np.float64]
 BUNDLED_WEATHER = {
     "surfrad-alamosa-2016-01-01": "surfrad-slv16001.dat",
     "rmis-golden-2022-01": "rmis_weather_data.csv",
+    "kma-suwon-2008-12": "kma_asos_119_suwon_2008-12_2009-01.csv",
 }
 _SURFRAD_FIELDS = ("dw_solar", "uw_solar", "direct_n", "diffuse", "dw_ir", "dw_casetemp",
                    "dw_dometemp", "uw_ir", "uw_casetemp", "uw_dometemp", "uvb", "par",
@@ -332,7 +334,8 @@ def read_weather(path: str | Path) -> WeatherSeries:
 
     ``.epw`` → :func:`read_epw`; ``.dat`` → :func:`read_surfrad`; ``.csv`` whose second
     line starts with "Date (MM/DD/YYYY)" → :func:`read_tmy3`, whose first line names
-    "Global Horizontal" → :func:`read_rmis`.
+    "Global Horizontal" → :func:`read_rmis`, whose first line names the KMA daily columns
+    "minTa" and "sumGsr" → :func:`dsfd.weather.daily.read_kma_daily`.
     """
     path = Path(path)
     with path.open(encoding="latin-1") as handle:
@@ -344,18 +347,22 @@ def read_weather(path: str | Path) -> WeatherSeries:
         return read_tmy3(path)
     if "Global Horizontal" in first:
         return read_rmis(path)
+    if "sumGsr" in first and "minTa" in first:
+        return read_kma_daily(path)
     if suffix == ".dat":
         return read_surfrad(path)
     raise ValueError(f"{path}: unknown weather file format (supported: SURFRAD .dat, "
-                     "NREL RMIS .csv, EPW, TMY3 .csv)")
+                     "NREL RMIS .csv, EPW, TMY3 .csv, KMA ASOS daily .csv)")
 
 
 def bundled_weather(name: str) -> Path:
     """Path of a weather file shipped in ``dsfd/data/weather`` (see dsfd/data/README.md).
 
-    Names: ``"surfrad-alamosa-2016-01-01"`` (1-min, clear winter day, UTC) and
-    ``"rmis-golden-2022-01"`` (5-min, 1–4 Jan 2022, MST). Read either with
-    :func:`read_weather`. Requires the package to be installed as files (not zipped).
+    Names: ``"surfrad-alamosa-2016-01-01"`` (1-min, clear winter day, UTC),
+    ``"rmis-golden-2022-01"`` (5-min, 1–4 Jan 2022, MST) and ``"kma-suwon-2008-12"``
+    (daily statistics of Suwon, 1 Dec 2008 – 31 Jan 2009, KST: the period of the paper's
+    experiments, disaggregated on reading). Read any with :func:`read_weather`. Requires
+    the package to be installed as files (not zipped).
     """
     try:
         filename = BUNDLED_WEATHER[name]
