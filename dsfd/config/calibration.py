@@ -11,6 +11,7 @@ YAML shape (every key optional; the defaults suit a 1-minute controller cycle)::
       update_interval_s: 600      # one on-line update every 10 min
       max_nfev: 8                 # model evaluations per on-line update
       offline_max_nfev: 40        # ... for the off-line batch fit
+      flow_from_velocity: true    # f, c, n from the cavity speed, the rest from x1..x5
       loss: soft_l1               # robust loss of scipy.optimize.least_squares
       f_scale: 1.0                # soft threshold of the loss, in residual scales
       temperature_scale_k: 0.3    # residual scale of x1..x5
@@ -82,6 +83,10 @@ class Calibration:
         "Jacobians (0 = finite differences at every iteration)", ge=0, le=20)
     offline_max_nfev: int = setting(
         40, doc="Residual evaluations of the off-line batch fit", ge=1, le=5000)
+    flow_from_velocity: bool = setting(
+        True, doc="Fit the airflow parameters f, c, n to the cavity speed alone, then the "
+        "heat-transfer coefficients and offsets to the temperatures alone (false: one joint "
+        "fit, in which f, c, n also absorb the temperatures' model-form error)")
     loss: Literal["linear", "soft_l1", "huber", "cauchy", "arctan"] = setting(
         "soft_l1", doc="Robust loss ρ of scipy.optimize.least_squares")
     f_scale: float = setting(

@@ -18,11 +18,12 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
 from dsfd.config.calibration import Calibration
-from dsfd.estimation.fit import FitResult, fit_window
+from dsfd.estimation.fit import FitResult, fit_staged, fit_window
 from dsfd.estimation.objective import WindowProblem, window_problem
 from dsfd.estimation.observer import observe, observer_step
 from dsfd.estimation.params import FIT_NAMES, I_Q, N_PARAMS, ParameterSpace
@@ -63,6 +64,16 @@ def make_problem(model: LumpedModel, steps: StepData, x_hat: np.ndarray, x_pred:
         velocity_scale_ms=settings.velocity_scale_ms,
         spike_threshold_k=settings.spike_threshold_k,
         start_smoothing=settings.smoothing_samples(steps.step_s))
+
+
+#: Rounds of the staged fit: an on-line update starts from the last estimate, the off-line
+#: fit from the defaults (:func:`dsfd.estimation.fit.fit_staged`).
+ONLINE_ROUNDS, OFFLINE_ROUNDS = 1, 3
+
+
+def _fit(settings: Calibration, rounds: int) -> Callable[..., FitResult]:
+    """The window fit the settings ask for: staged (flow from the speed) or joint."""
+    return partial(fit_staged, rounds=rounds) if settings.flow_from_velocity else fit_window
 
 
 def window_start(time_s: np.ndarray, end_row: int, window_h: float) -> int:
@@ -132,11 +143,11 @@ class OnlineCalibrator:
         hours = 0.0 if st.last_update_s is None else (now - st.last_update_s) / 3600.0
         prior_cov = self.space.grown_prior(st.cov_phi, hours)
         try:
-            fit = fit_window(problem, self.space, prior_phi=self.space.to_phi(st.theta),
-                             prior_cov=prior_cov, free=free, loss=cfg.loss,
-                             f_scale=cfg.f_scale, prior_weight=cfg.prior_weight,
-                             max_nfev=max_nfev or cfg.max_nfev, broyden=cfg.broyden_updates,
-                             adaptive_scales=cfg.adaptive_scales)
+            fit = _fit(cfg, ONLINE_ROUNDS)(
+                problem, self.space, prior_phi=self.space.to_phi(st.theta),
+                prior_cov=prior_cov, free=free, loss=cfg.loss, f_scale=cfg.f_scale,
+                prior_weight=cfg.prior_weight, max_nfev=max_nfev or cfg.max_nfev,
+                broyden=cfg.broyden_updates, adaptive_scales=cfg.adaptive_scales)
         except (np.linalg.LinAlgError, ValueError, FloatingPointError) as exc:
             self.state = dataclasses.replace(st, failed_updates=st.failed_updates + 1)
             return UpdateReport(self.state, None, f"fit failed: {exc}")
@@ -245,11 +256,11 @@ def offline_fit(model: LumpedModel, steps: StepData, settings: Calibration | Non
         problem = make_problem(model, steps, track.x_hat[0], track.x_pred[0], settings,
                                forgetting_per_h=1.0)
         free = space.free_in_window(problem.regimes, problem.measured)
-        fit = fit_window(problem, space, prior_phi=mean, prior_cov=cov, free=free,
-                         loss=settings.loss, f_scale=settings.f_scale,
-                         prior_weight=settings.prior_weight,
-                         max_nfev=max_nfev or settings.offline_max_nfev,
-                         adaptive_scales=settings.adaptive_scales, progress=progress)
+        fit = _fit(settings, OFFLINE_ROUNDS)(
+            problem, space, prior_phi=mean, prior_cov=cov, free=free, loss=settings.loss,
+            f_scale=settings.f_scale, prior_weight=settings.prior_weight,
+            max_nfev=max_nfev or settings.offline_max_nfev,
+            adaptive_scales=settings.adaptive_scales, progress=progress)
         theta = np.where(fit.free, space.clip(fit.theta), space.default)
     assert fit is not None
     state = dataclasses.replace(

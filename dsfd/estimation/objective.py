@@ -131,6 +131,12 @@ class WindowProblem:
         out[..., 5] = np.abs(traj.v_cav_ms)
         return out.reshape(r, s, h, N_OUT)
 
+    def only(self, outputs: tuple[str, ...]) -> WindowProblem:
+        """The same window with residuals of ``outputs`` only (others masked out)."""
+        use = np.array([name in outputs for name in OUTPUTS])
+        mask = self.mask & use
+        return dataclasses.replace(self, mask=mask, weight=np.where(mask, self.weight, 0.0))
+
     def residuals_of(self, outputs: np.ndarray) -> np.ndarray:
         """Weighted residual vectors of predicted outputs (R, S, H, 6) → (R, m)."""
         diff = np.where(self.mask, outputs - self.target, 0.0) * self.weight
