@@ -37,7 +37,7 @@ import numpy as np
 from scipy.linalg import solve_triangular
 from scipy.optimize import least_squares
 
-from dsfd.estimation.objective import WindowProblem
+from dsfd.estimation.objective import OUTPUTS, WindowProblem
 from dsfd.estimation.params import I_C, I_F, I_N, N_PARAMS, ParameterSpace
 
 #: Forward-difference steps in φ: 1 % of θ for log coordinates, 0.01 for n, 1 W/m2 for
@@ -257,7 +257,7 @@ def _posterior(jac: np.ndarray, residual: np.ndarray, a_prior: np.ndarray,
 
 #: The airflow parameters f, c, n (the first stage of :func:`fit_staged`).
 FLOW_PARAMETERS = (I_F, I_C, I_N)
-TEMPERATURES = ("x1", "x2", "x3", "x4", "x5")
+TEMPERATURES = OUTPUTS[:5]  # x1..x5
 
 
 def fit_staged(problem: WindowProblem, space: ParameterSpace, *, prior_phi: np.ndarray,

@@ -132,7 +132,8 @@ class WindowProblem:
         return out.reshape(r, s, h, N_OUT)
 
     def only(self, outputs: tuple[str, ...]) -> WindowProblem:
-        """The same window with residuals of ``outputs`` only (others masked out)."""
+        """The same window with residuals of ``outputs`` only (subset of :data:`OUTPUTS`;
+        the others masked out)."""
         use = np.array([name in outputs for name in OUTPUTS])
         mask = self.mask & use
         return dataclasses.replace(self, mask=mask, weight=np.where(mask, self.weight, 0.0))
@@ -176,8 +177,7 @@ def window_problem(model: LumpedModel, steps: StepData, x_hat: np.ndarray,
                    x_pred: np.ndarray, *, horizon: int, stride: int,
                    forgetting_per_h: float, temperature_scale_k: float,
                    velocity_scale_ms: float, spike_threshold_k: float,
-                   start_smoothing: int = 1,
-                   fit_outputs: tuple[str, ...] = OUTPUTS) -> WindowProblem:
+                   start_smoothing: int = 1) -> WindowProblem:
     """Prepare the Eq. 3 residual of a window.
 
     Parameters
@@ -199,8 +199,6 @@ def window_problem(model: LumpedModel, steps: StepData, x_hat: np.ndarray,
     start_smoothing : int
         Samples of the centred smoothing of the measured start states (odd; 1 = raw), see
         :func:`smoothed_starts`.
-    fit_outputs : tuple of str
-        Outputs that enter the objective (subset of :data:`OUTPUTS`).
 
     Returns
     -------
@@ -229,8 +227,6 @@ def window_problem(model: LumpedModel, steps: StepData, x_hat: np.ndarray,
     target[..., :5] = y[row]
     target[..., 5] = steps.v_ms[row]
     mask = ok_step[..., None] & np.isfinite(target)
-    use = np.array([name in fit_outputs for name in OUTPUTS])
-    mask &= use
     age_h = (steps.time_s[-1] - steps.time_s[row]) / 3600.0
     lam = np.sqrt(forgetting_per_h ** age_h)
     scale = np.array([temperature_scale_k] * 5 + [velocity_scale_ms])
