@@ -112,7 +112,7 @@ def _write(tmp_path: Path, rows: list[dict[str, str]]) -> Path:
     return path
 
 
-def test_missing_cell_and_missing_day_are_named(tmp_path, rows):
+def test_missing_cell_missing_day_and_empty_file_are_named(tmp_path, rows):
     broken = [dict(r) for r in rows[:5]]
     broken[2]["sumGsr"] = ""
     with pytest.raises(ValueError, match=r"row 4 \(2008-12-03\): column 'sumGsr' is empty"):
@@ -121,3 +121,7 @@ def test_missing_cell_and_missing_day_are_named(tmp_path, rows):
     del gap[3]
     with pytest.raises(ValueError, match=r"row 5 \(2008-12-05\) does not follow"):
         read_kma_daily(_write(tmp_path, gap))
+    empty = tmp_path / "empty.csv"
+    empty.write_text(",".join(rows[0]) + "\n")
+    with pytest.raises(ValueError, match=r"empty\.csv: no data rows"):
+        read_kma_daily(empty)
