@@ -98,13 +98,15 @@ class HorizonEvaluator:
 
     def __init__(self, cfg: PanelConfig, model: LumpedModel, optics: FacadeOptics,
                  problem: ControlProblem, angles_deg: np.ndarray, *,
-                 coupling_tol_k: float | None = None) -> None:
+                 coupling_tol_k: float | None = None,
+                 loads: OpticalLoads | None = None) -> None:
         self.cfg = cfg
         self.model = model
         self.coupling_tol_k = coupling_tol_k
         self.problem = problem
         self.angles_deg = np.asarray(angles_deg, float)
-        self.loads = optics.loads(problem.forcing, np.radians(self.angles_deg))
+        self.loads = (optics.loads(problem.forcing, np.radians(self.angles_deg))
+                      if loads is None else loads)
         self.rollouts = 0
         step = cfg.louver.step_deg if cfg.louver is not None else 18.0
         self._penalty = louver_move_penalty(
@@ -133,6 +135,13 @@ class HorizonEvaluator:
         return terms, traj.label[:, 0]
 
 
+def _block_means(v: np.ndarray, factor: int, axis: int) -> np.ndarray:
+    n = v.shape[axis]
+    starts = np.arange(0, n, factor)
+    counts = np.diff(np.append(starts, n)).reshape((-1,) + (1,) * (v.ndim - axis - 1))
+    return np.add.reduceat(np.asarray(v, float), starts, axis=axis) / counts
+
+
 def coarsen(forcing: Forcing, factor: int) -> Forcing:
     """Block means of a horizon's boundary over ``factor`` consecutive steps.
 
@@ -140,10 +149,14 @@ def coarsen(forcing: Forcing, factor: int) -> Forcing:
     means (the exact ZOH is exact for any step; only the weather and the linearisation
     are held longer).
     """
-    n = forcing.time_s.shape[0]
-    starts = np.arange(0, n, factor)
-    counts = np.diff(np.append(starts, n))
-    return Forcing(*(np.add.reduceat(np.asarray(v, float), starts) / counts for v in forcing))
+    return Forcing(*(_block_means(v, factor, 0) for v in forcing))
+
+
+def coarsen_loads(loads: OpticalLoads, factor: int) -> OpticalLoads:
+    """Block means of the optical loads (m angles, n steps, ...) over ``factor`` steps: the
+    screening's loads are the step averages of the full-resolution ones (no second pass
+    through the optics)."""
+    return OpticalLoads(*(_block_means(v, factor, 1) for v in loads))
 
 
 class MpcOptimiser:
@@ -187,8 +200,10 @@ class MpcOptimiser:
         all_a, all_r, all_o = (np.concatenate(c) for c in zip(*cand, strict=True))
         screen_problem = dataclasses.replace(problem,
                                              forcing=coarsen(problem.forcing, self.factor))
+        full = HorizonEvaluator(self.cfg, self.model, self.optics, problem, angles,
+                                coupling_tol_k=ctl.coupling_tolerance_k)
         screen = HorizonEvaluator(self.cfg, self.screen_model, self.optics, screen_problem,
-                                  angles)
+                                  angles, loads=coarsen_loads(full.loads, self.factor))
         s_terms, _ = screen.evaluate(all_a, all_r, all_o)
         trace.append(f"stage 1: screened {all_a.size} candidates at "
                      f"{self.screen_model.dt:g} s steps")
@@ -203,16 +218,21 @@ class MpcOptimiser:
             g_best = coarse.argmin(axis=2)
             top = np.argsort(pair_cost, axis=None, kind="stable")[: ctl.refine_max_pairs]
             pa, pr = np.unravel_index(top, pair_cost.shape)
-            spacing = float(np.max(np.diff(grid)))
             centre = grid[g_best[pa, pr]]
+            # The louver neighbours of the best pair, at its OR bracket: the stage-3 check
+            # of the full-resolution best then usually finds them evaluated already.
+            na_ = _around(int(pa[0]), n_a, ctl.louver_neighbours)
+            pa = np.concatenate([pa, na_])
+            pr = np.concatenate([pr, np.full(na_.size, pr[0])])
+            centre = np.concatenate([centre, np.full(na_.size, centre[0])])
+            spacing = float(np.max(np.diff(grid)))
             k = ctl.or_refine_points
             frac = np.linspace(-1.0, 1.0, k + 2)[1:-1]
             pts = np.clip(centre[:, None] + spacing * frac[None, :], 0.0, 1.0)
             fa = np.concatenate([fa, np.repeat(pa, k)])
             fr = np.concatenate([fr, np.repeat(open_regimes[pr], k)])
             fo = np.concatenate([fo, pts.ravel()])
-        full = HorizonEvaluator(self.cfg, self.model, self.optics, problem, angles,
-                                coupling_tol_k=ctl.coupling_tolerance_k)
+            fa, fr, fo = _distinct(fa, fr, fo)
         terms, labels = full.evaluate(fa, fr, fo)
         best = _Best.of(terms, labels, fa, fr, fo)
         trace.append(f"stage 2: {fa.size} at full resolution ({len(finalists)} finalists, "
@@ -245,13 +265,26 @@ class MpcOptimiser:
                              rollouts=full.rollouts + screen.rollouts, trace=tuple(trace))
 
 
+def _distinct(a: np.ndarray, r: np.ndarray, o: np.ndarray
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Candidates (louver index, regime, OR) without repeats, in first-seen order."""
+    _, first = np.unique(np.stack([a, r, o]), axis=1, return_index=True)
+    keep = np.sort(first)
+    return a[keep], r[keep], o[keep]
+
+
+def _around(idx: int, n_angles: int, reach: int) -> np.ndarray:
+    """Louver indices within ``reach`` steps of ``idx`` (itself excluded)."""
+    out = np.arange(idx - reach, idx + reach + 1)
+    return out[(out >= 0) & (out < n_angles) & (out != idx)]
+
+
 def _louver_neighbours(best: _Best, n_angles: int, reach: int, fa: np.ndarray,
                        fr: np.ndarray, fo: np.ndarray
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Louver positions within ``reach`` steps of the best, at its regime and OR, that have
     not been evaluated at full resolution yet (angle indices, regimes, openings)."""
-    idx = np.arange(best.angle_idx - reach, best.angle_idx + reach + 1)
-    idx = idx[(idx >= 0) & (idx < n_angles) & (idx != best.angle_idx)]
+    idx = _around(best.angle_idx, n_angles, reach)
     seen = (fr == best.regime) & np.isclose(fo, best.or_)
     idx = idx[~np.isin(idx, fa[seen])]
     return idx, np.full(idx.size, best.regime), np.full(idx.size, best.or_)

@@ -296,6 +296,26 @@ def orifice_path_mass_flow(dp: np.ndarray, k_in: np.ndarray, k_out: np.ndarray,
     return regularised_power(dp, coef, 0.5, dp_t)
 
 
+class OneNodeFlow(NamedTuple):
+    """Solution of the one-node cavity (:func:`one_node_flows`).
+
+    Attributes
+    ----------
+    m_dot : ndarray (B, 4), [kg/s]
+        Mass flows into the cavity.
+    p_c : ndarray (B,), [Pa]
+        Cavity pressure at z = 0.
+    dpc_drho : ndarray (B,), [Pa/(kg/m3)]
+        dP_c/dρ_c at the solution (NaN where no opening is open): the tangent that
+        predicts P_c for a nearby cavity density, so that a re-solve inside the coupling
+        starts within Newton's quadratic range.
+    """
+
+    m_dot: np.ndarray
+    p_c: np.ndarray
+    dpc_drho: np.ndarray
+
+
 def one_node_flows(
     p_b: np.ndarray,
     rho_b: np.ndarray,
@@ -307,7 +327,7 @@ def one_node_flows(
     tol_kgs: float = 1e-15,
     max_iter: int = 100,
     p_c_start: np.ndarray | None = None,
-) -> tuple[np.ndarray, np.ndarray]:
+) -> OneNodeFlow:
     """General one-node cavity flow solver (physics §8.4.4).
 
     Solves Σ_k ṁ_k(P_c) = 0 for the cavity pressure P_c at z = 0, where
@@ -333,58 +353,71 @@ def one_node_flows(
 
     Returns
     -------
-    m_dot : ndarray (B, 4), [kg/s]
-        Mass flows into the cavity.
-    p_c : ndarray (B,), [Pa]
-        Cavity pressure at z = 0.
+    OneNodeFlow
     """
     open_ = np.isfinite(k)
     inv_k = 1.0 / k  # 0 where closed (k = inf)
     head = p_b + rho_c[:, None] * GRAVITY * z  # Δp_k = head_k − P_c
     # Bracket of P_c: the open openings' heads ± 1 Pa (nan-free min/max: this runs inside
-    # every coupling evaluation of the all-open regime).
-    lo = np.where(open_, head, np.inf).min(axis=1) - 1.0
-    hi = np.where(open_, head, -np.inf).max(axis=1) + 1.0
-    lo = np.where(np.isfinite(lo), lo, 0.0)
-    hi = np.where(np.isfinite(hi), hi, 0.0)
+    # every coupling evaluation of the all-open regime, where every opening is open).
+    if open_.all():
+        lo, hi = head.min(axis=1) - 1.0, head.max(axis=1) + 1.0
+    else:
+        lo = np.where(open_, head, np.inf).min(axis=1) - 1.0
+        hi = np.where(open_, head, -np.inf).max(axis=1) + 1.0
+        lo = np.where(np.isfinite(lo), lo, 0.0)
+        hi = np.where(np.isfinite(hi), hi, 0.0)
     # Flow coefficients for inflow (boundary air) and outflow (cavity air) of each opening.
     c_in = np.sqrt(2.0 * rho_b * inv_k)
     c_out = np.sqrt(2.0 * rho_c[:, None] * inv_k)
 
-    def total(pc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Σṁ and dΣṁ/dP_c at cavity pressure ``pc``."""
+    def total(pc: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """ṁ_k, Σṁ and dṁ_k/dΔp_k at cavity pressure ``pc``."""
         dp = head - pc[:, None]
         coef = np.where(dp > 0, c_in, c_out)
         mag = np.abs(dp)
         if mag.min() >= dp_t:  # usual case: plain orifice law, no regularisation needed
             root = np.sqrt(mag)
-            return (coef * np.copysign(root, dp)).sum(axis=1), -(0.5 * coef / root).sum(axis=1)
+            m = coef * np.copysign(root, dp)
+            return m, m.sum(axis=1), 0.5 * coef / root
         m = regularised_power(dp, coef, 0.5, dp_t)
-        slope = _regularised_power_slope(dp, coef, 0.5, dp_t)  # dṁ/dΔp ≥ 0
-        return m.sum(axis=1), -slope.sum(axis=1)
+        return m, m.sum(axis=1), _regularised_power_slope(dp, coef, 0.5, dp_t)
 
-    # Start from the conductance-weighted mean head (exact for linear openings).
-    w = np.sqrt(inv_k)
-    pc = np.where(w.sum(axis=1) > 0, (np.where(open_, head, 0.0) * w).sum(axis=1)
-                  / np.maximum(w.sum(axis=1), 1e-300), 0.5 * (lo + hi))
-    if p_c_start is not None:
-        usable = np.isfinite(p_c_start) & (p_c_start > lo) & (p_c_start < hi)
-        pc = np.where(usable, p_c_start, pc)
+    def result(m: np.ndarray, slope: np.ndarray, pc: np.ndarray) -> OneNodeFlow:
+        # Implicit differentiation of Σṁ(P_c, ρ_c) = 0: ∂Σṁ/∂ρ_c = Σ ṁ'_k g z_k (the
+        # cavity column) + Σ_out ṁ_k/(2ρ_c) (outflows carry cavity air, C ∝ √ρ_c).
+        d_rho = (slope * (GRAVITY * z)).sum(axis=1) + np.where(
+            m < 0, m, 0.0).sum(axis=1) / (2.0 * rho_c)
+        d_pc = slope.sum(axis=1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            sens = np.where(d_pc > 0, d_rho / d_pc, np.nan)
+        return OneNodeFlow(m, pc, sens)
+
+    usable = (np.zeros(lo.shape, bool) if p_c_start is None
+              else np.isfinite(p_c_start) & (p_c_start > lo) & (p_c_start < hi))
+    if usable.all():
+        pc = p_c_start
+    else:  # start from the conductance-weighted mean head (exact for linear openings)
+        w = np.sqrt(inv_k)
+        pc = np.where(w.sum(axis=1) > 0, (np.where(open_, head, 0.0) * w).sum(axis=1)
+                      / np.maximum(w.sum(axis=1), 1e-300), 0.5 * (lo + hi))
+        if p_c_start is not None:
+            pc = np.where(usable, p_c_start, pc)
     # The whole batch iterates together (batches are small; converged rows stay put), which
     # is cheaper than re-indexing the unfinished rows every iteration.
     for _ in range(max_iter):
-        s, ds = total(pc)
+        m_dot, s, slope = total(pc)
+        ds = -slope.sum(axis=1)
         # Bracket update: s > 0 means P_c is too low.
         too_low = s > 0
         lo = np.where(too_low, pc, lo)
         hi = np.where(too_low, hi, pc)
         done = (np.abs(s) <= tol_kgs) | (hi - lo <= 1e-13 * (1 + np.abs(pc)))
         if done.all():
-            break
+            return result(m_dot, slope, pc)
         # ds < 0 wherever an opening is open; elsewhere the step falls outside → bisect.
         newton = pc - s / np.where(ds < 0, ds, -1.0)
         inside = (newton > lo) & (newton < hi)
         pc = np.where(done, pc, np.where(inside, newton, 0.5 * (lo + hi)))
-    dp = head - pc[:, None]
-    m_dot = regularised_power(dp, np.where(dp > 0, c_in, c_out), 0.5, dp_t)
-    return m_dot, pc
+    m_dot, _, slope = total(pc)
+    return result(m_dot, slope, pc)

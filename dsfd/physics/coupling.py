@@ -257,7 +257,7 @@ def coupled_step(nc: NetworkConstants, x: np.ndarray, inp: StepInputs, theta: np
         if out_m9 is not None and sub.any_all_open:
             out_m9[rows[sub.rows_all_open]] = pf.m_all_open
             if not whole:  # keep the cavity pressure as the start of the next evaluation
-                setup.p_c_guess[rows] = sub.p_c_guess
+                setup.p_c_warm[rows] = sub.p_c_warm
         if exact:
             md = modal(lap, q, nc.capacity)
             lam[rows], vec[rows], x_star[rows] = md.lam, md.vec, md.x_steady

@@ -240,7 +240,7 @@ class LumpedModel:
                 guess = np.where(same, res.t5_ahead_k, res.x_next[:, 4])
                 slope = np.where(same, res.coupling_slope, np.nan)
                 if setup.any_all_open:  # the all-open cavity pressure changes little too
-                    setup.p_c_guess[:, k + 1] = setup.p_c_guess[:, k]
+                    setup.p_c_warm[:, k + 1] = setup.p_c_warm[:, k]
             x = res.x_next
             xs[:, k + 1] = x
 

@@ -70,7 +70,9 @@ class FlowSetup(NamedTuple):
     any_power: bool
     any_all_open: bool
     rows_all_open: np.ndarray  # indices of the all-open rows (flat batch)
-    p_c_guess: np.ndarray  # last cavity pressure of the all-open rows [Pa] (warm start)
+    # Warm start of the all-open rows' cavity pressure, (B, 3): the last solution P_c [Pa],
+    # the cavity density it was solved at [kg/m3] and dP_c/dρ_c there [Pa m3/kg] (NaN: none).
+    p_c_warm: np.ndarray
     dp_boundary: np.ndarray  # p_B,in − p_B,out [Pa]
     dz: np.ndarray  # z_in − z_out [m]
     rho_fwd: np.ndarray  # inflow density, positive direction [kg/m3]
@@ -161,7 +163,7 @@ def flow_setup(
         any_all_open=bool(np.any(law == _LAW_ALL)) and bool(np.all(geom.area_m2 > 0)),
         rows_all_open=np.flatnonzero(law == _LAW_ALL) if np.all(geom.area_m2 > 0)
         else np.zeros(0, dtype=int),
-        p_c_guess=np.full(nb, np.nan),
+        p_c_warm=np.full((nb, 3), np.nan),
         dp_boundary=p_b[rows, inlet] - p_b[rows, outlet],
         dz=z[inlet] - z[outlet],
         rho_fwd=rho_b[rows, inlet],
@@ -229,9 +231,15 @@ def path_flows(setup: FlowSetup, t5_k: np.ndarray, geom: AirflowGeometry) -> Pat
     flow *= s.path_gain
     if s.any_all_open:
         r9 = s.rows_all_open
-        m9, p_c = one_node_flows(s.p_b[r9], s.rho_b[r9], geom.z_m, s.k_all[r9], rho_c[r9],
-                                 dp_t, p_c_start=s.p_c_guess[r9], tol_kgs=ONE_NODE_TOL_KGS)
-        s.p_c_guess[r9] = p_c  # in place: the next evaluation of this step starts here
+        rho9 = rho_c[r9]
+        warm = s.p_c_warm[r9]
+        tangent = warm[:, 2] * (rho9 - warm[:, 1])
+        start = warm[:, 0] + np.where(np.isfinite(tangent), tangent, 0.0)
+        sol = one_node_flows(s.p_b[r9], s.rho_b[r9], geom.z_m, s.k_all[r9], rho9, dp_t,
+                             p_c_start=start, tol_kgs=ONE_NODE_TOL_KGS)
+        # In place: the next evaluation of this step (and the next step) starts here.
+        s.p_c_warm[r9] = np.stack([sol.p_c, rho9, sol.dpc_drho], axis=1)
+        m9 = sol.m_dot
     else:
         m9 = _EMPTY4
     return PathFlow(flow, rho_c, m9)

@@ -62,7 +62,7 @@ def test_one_node_solver_equals_corrected_closed_form(geom):
         k_two = np.full_like(k_all, np.inf)
         k_two[:, inlet] = k_all[:, inlet]
         k_two[:, outlet] = k_all[:, outlet]
-        m, _ = one_node_flows(p_b, rho_b, geom.z_m, k_two, rho_c, geom.dp_reg_pa)
+        m = one_node_flows(p_b, rho_b, geom.z_m, k_two, rho_c, geom.dp_reg_pa).m_dot
         # Outside the regularised band of both openings the two must agree exactly.
         drop_in = k_up * closed**2 / (2 * rho_in)
         drop_out = k_dn * closed**2 / (2 * rho_c)
@@ -82,7 +82,7 @@ def test_one_node_conserves_mass_and_is_monotone(geom):
     p_b, rho_b, _ = boundary_state(bnd, geom)
     rho_c = air_density(rng.uniform(260, 340, n), bnd.p_atm_pa)
     k = opening_resistance(rng.uniform(0, 1, n), rng.uniform(5, 3000, n), geom)
-    m, p_c = one_node_flows(p_b, rho_b, geom.z_m, k, rho_c, geom.dp_reg_pa)
+    m, p_c, _ = one_node_flows(p_b, rho_b, geom.z_m, k, rho_c, geom.dp_reg_pa)
     np.testing.assert_allclose(m.sum(axis=1), 0.0, atol=1e-12)
     # Raising the cavity pressure can only reduce every inflow.
     head = p_b + rho_c[:, None] * GRAVITY * geom.z_m
@@ -91,6 +91,37 @@ def test_one_node_conserves_mass_and_is_monotone(geom):
         rho_up = np.where(dp > 0, rho_b, rho_c[:, None])
         m2 = regularised_power(dp, np.sqrt(2 * rho_up / k), 0.5, geom.dp_reg_pa)
         assert np.all(np.sign(m2.sum(axis=1)) == -np.sign(dpc))
+
+
+def test_one_node_pressure_tangent_matches_a_re_solve(geom):
+    """dP_c/dρ_c from implicit differentiation equals the central difference of two full
+    solves; it is the warm start of the coupling's re-solves, so a wrong sign or factor
+    would only cost iterations, but a right one has to predict P_c to second order."""
+    rng = np.random.default_rng(4)
+    n = 200
+    bnd = _bnd(rng.uniform(-10, 30, n), 22.0 + 0 * rng.uniform(size=n), rng.uniform(0, 10, n),
+               rng.uniform(-0.6, 0.7, n), rng.uniform(-0.7, 0.8, n))
+    p_b, rho_b, _ = boundary_state(bnd, geom)
+    rho_c = air_density(rng.uniform(260, 340, n), bnd.p_atm_pa)
+    k = opening_resistance(rng.uniform(0.05, 1, n), rng.uniform(5, 3000, n), geom)
+    sol = one_node_flows(p_b, rho_b, geom.z_m, k, rho_c, geom.dp_reg_pa, tol_kgs=1e-15)
+    h = 1e-5 * rho_c
+    up, down = (one_node_flows(p_b, rho_b, geom.z_m, k, rho_c + s * h, geom.dp_reg_pa,
+                               tol_kgs=1e-15).p_c for s in (1, -1))
+    central = (up - down) / (2 * h)
+    # Outside the regularised band (where the law has a kink in curvature) the two agree.
+    dp = p_b + rho_c[:, None] * GRAVITY * geom.z_m - sol.p_c[:, None]
+    clear = np.abs(dp).min(axis=1) > 10 * geom.dp_reg_pa
+    assert clear.sum() > 100
+    np.testing.assert_allclose(sol.dpc_drho[clear], central[clear], rtol=1e-4)
+    # Predicting P_c along the tangent is second-order accurate: a 1 % change in density
+    # is predicted far better than by holding P_c.
+    big = 0.01 * rho_c
+    moved = one_node_flows(p_b, rho_b, geom.z_m, k, rho_c + big, geom.dp_reg_pa,
+                           tol_kgs=1e-15).p_c
+    tangent_err = np.abs(sol.p_c + sol.dpc_drho * big - moved)[clear]
+    hold_err = np.abs(sol.p_c - moved)[clear]
+    assert np.median(tangent_err) < 0.02 * np.median(hold_err)
 
 
 def test_regime_ten_gives_zero_flow(geom):
