@@ -66,6 +66,7 @@ def _bench_paper_tables(args: argparse.Namespace) -> dict[str, float]:
     figures = paper_tables(load_panel(args.config), seed=args.seed,
                            weather=args.weather or WEATHER,
                            validation_days=VALIDATION_DAYS if args.days is None else args.days,
+                           centre=args.prior_centre,
                            progress=lambda msg: print(msg, file=sys.stderr, flush=True))
     print(report(figures))
     print()
@@ -102,6 +103,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seeds", type=int, default=10,
                    help="plant-velocity: seeded draws of the plant's true parameters")
     p.add_argument("--weather", default=None, help="weather file or bundled name")
+    p.add_argument("--prior-centre", action="store_true",
+                   help="paper-tables: the plant at the centre of the E16 prior (f_true ~ 200, "
+                   "the speeds of the paper's Table 1) instead of the seed's draw")
     p.add_argument("--json", type=Path, default=None, help="write the figures as JSON")
     p.set_defaults(handler=run)
 

@@ -31,7 +31,6 @@ from dsfd.sim.truth_run import run_truth, velocity_table
 #: The paper's Table 1 range of mean measured cavity speeds [m/s] (2.76 … 14.10 cm/s,
 #: rounded outwards as in issue 3).
 TABLE1_RANGE_MS = (0.02, 0.15)
-F_CENTRE = math.sqrt(20.0 * 2000.0)
 #: The paper's airflow experiment: 8–11 December 2008 (days 7–10 of the bundled KMA record).
 PAPER_WEATHER, PAPER_START_DAY, PAPER_DAYS = "kma-suwon-2008-12", 7, 4.0
 
@@ -76,9 +75,7 @@ def bench_plant_velocity(cfg: PanelConfig, *, seeds: int = 10, days: float | Non
     # Days of the record as replayed at the panel's site (run_truth replays it there and
     # aligns the start to a whole minute).
     start_s = at_site(series, cfg).coverage_s[0] + start_day * 86400.0
-    p = cfg.parameters
-    centre = TrueParameters(h_multipliers=(1.0,) * 6, f=F_CENTRE, c=p.c.default,
-                            n=p.n.default)
+    centre = TrueParameters.prior_centre(cfg)
     run = run_truth(cfg, series, seed=0, hours=hours, start_s=start_s, params=centre)
     out = _row("centre", centre, velocity_table(run.data))
     inside = 0

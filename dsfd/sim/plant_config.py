@@ -151,6 +151,10 @@ def _literal_choices(annotation: object) -> tuple[str, ...]:
     return tuple(part.strip().strip("'\"") for part in inner.split(","))
 
 
+#: Range of the log-uniform f_true prior [-] (errata E16).
+F_TRUE_RANGE = (20.0, 2000.0)
+
+
 @dataclass(frozen=True, kw_only=True)
 class TrueParameters:
     """The plant's hidden parameters (errata E16).
@@ -177,10 +181,18 @@ class TrueParameters:
     def draw(cls, cfg: PanelConfig, rng: np.random.Generator) -> TrueParameters:
         """Seeded draw: m log-uniform in [0.5, 2], f_true log-uniform in [20, 2000] (E16)."""
         m = np.exp(rng.uniform(math.log(0.5), math.log(2.0), size=6))
-        f = float(np.exp(rng.uniform(math.log(20.0), math.log(2000.0))))
+        f = float(np.exp(rng.uniform(*(math.log(v) for v in F_TRUE_RANGE))))
         p = cfg.parameters
         return cls(h_multipliers=tuple(float(v) for v in m), f=f, c=p.c.default,
                    n=p.n.default)
+
+    @classmethod
+    def prior_centre(cls, cfg: PanelConfig) -> TrueParameters:
+        """The centre of the E16 prior: multipliers 1 and f_true = √(20·2000) ≈ 200 (the
+        geometric mean of its log-uniform range); c, n the config's defaults."""
+        p = cfg.parameters
+        return cls(h_multipliers=(1.0,) * 6, f=math.sqrt(F_TRUE_RANGE[0] * F_TRUE_RANGE[1]),
+                   c=p.c.default, n=p.n.default)
 
     @classmethod
     def nominal(cls, cfg: PanelConfig) -> TrueParameters:

@@ -37,6 +37,12 @@ def _prior_centre(cfg) -> TrueParameters:
     return TrueParameters(h_multipliers=(1.0,) * 6, f=F_CENTRE, c=p.c.default, n=p.n.default)
 
 
+def test_prior_centre_is_the_geometric_centre_of_the_e16_prior(suwon):
+    """The benches' nominal plant (``--prior-centre``) is the one these tests build by hand:
+    multipliers 1 and f_true = √(20·2000), the centre of E16's log-uniform range."""
+    assert TrueParameters.prior_centre(suwon) == _prior_centre(suwon)
+
+
 @pytest.fixture(scope="module")
 def day_run(suwon, rmis):
     return run_truth(suwon, rmis, seed=0, hours=24.0, start_s=day_start(rmis, 2),
