@@ -219,19 +219,17 @@ class MpcOptimiser:
             top = np.argsort(pair_cost, axis=None, kind="stable")[: ctl.refine_max_pairs]
             pa, pr = np.unravel_index(top, pair_cost.shape)
             centre = grid[g_best[pa, pr]]
-            # The louver neighbours of the best pair, at its OR bracket: the stage-3 check
-            # of the full-resolution best then usually finds them evaluated already.
-            na_ = _around(int(pa[0]), n_a, ctl.louver_neighbours)
-            pa = np.concatenate([pa, na_])
-            pr = np.concatenate([pr, np.full(na_.size, pr[0])])
-            centre = np.concatenate([centre, np.full(na_.size, centre[0])])
             spacing = float(np.max(np.diff(grid)))
             k = ctl.or_refine_points
             frac = np.linspace(-1.0, 1.0, k + 2)[1:-1]
             pts = np.clip(centre[:, None] + spacing * frac[None, :], 0.0, 1.0)
-            fa = np.concatenate([fa, np.repeat(pa, k)])
-            fr = np.concatenate([fr, np.repeat(open_regimes[pr], k)])
-            fo = np.concatenate([fo, pts.ravel()])
+            # The louver neighbours of the best pair at its screened OR: the winner is
+            # usually that pair at that OR, and stage 3 then finds its neighbours evaluated.
+            na_ = _around(int(pa[0]), n_a, ctl.louver_neighbours)
+            fa = np.concatenate([fa, np.repeat(pa, k), na_])
+            fr = np.concatenate([fr, np.repeat(open_regimes[pr], k),
+                                 np.full(na_.size, open_regimes[pr[0]])])
+            fo = np.concatenate([fo, pts.ravel(), np.full(na_.size, centre[0])])
             fa, fr, fo = _distinct(fa, fr, fo)
         terms, labels = full.evaluate(fa, fr, fo)
         best = _Best.of(terms, labels, fa, fr, fo)
