@@ -26,6 +26,7 @@ from dsfd.estimation.params import with_offsets
 from dsfd.physics.coupling import StepInputs
 from dsfd.physics.forcing import FacadeOptics, Forcing, OpticalLoads, step_inputs
 from dsfd.physics.model import LumpedModel
+from dsfd.physics.regimes import ALL_OPEN
 
 CLOSED = 10
 
@@ -211,6 +212,12 @@ class MpcOptimiser:
         # bracket around the screened optimum of the best open louver/regime pairs.
         finalists = _finalists(s_terms.cost_j, all_r, ctl.full_candidates,
                                ctl.finalist_margin_pct)
+        # The all-open set at every coarse OR at the screened best louver position: its
+        # one-node flows can settle on another branch over the coarse step than over
+        # one-minute steps (Q_air of the other sign; cost 25 % off, seen), a distortion no
+        # margin bounds, while the louver ranking the screening gets right.
+        finalists = np.union1d(finalists, np.flatnonzero(
+            (all_a == all_a[int(np.argmin(s_terms.cost_j))]) & (all_r == ALL_OPEN)))
         fa, fr, fo = all_a[finalists], all_r[finalists], all_o[finalists]
         if n_r:
             coarse = s_terms.cost_j[: n_a * n_r * n_g].reshape(n_a, n_r, n_g)

@@ -47,7 +47,7 @@ def test_matches_brute_force_and_never_loses_to_paper_sqp(suwon, mpc):
         assert d.cost_j <= sqp.cost_j + 1e-6 * abs(sqp.cost_j) + 1e-3
 
 
-@pytest.mark.parametrize(("seed", "index"), [(0, 170), (1, 73), (2, 156), (2, 4)])
+@pytest.mark.parametrize(("seed", "index"), [(0, 170), (1, 73), (2, 156), (2, 4), (8, 110)])
 def test_damper_sets_misranked_by_the_screening_are_decided_at_full_resolution(
         suwon, mpc, seed, index):
     """Two cooling cases from the benchmark's random problems. (0, 170): every damper set
@@ -59,7 +59,11 @@ def test_damper_sets_misranked_by_the_screening_are_decided_at_full_resolution(
     0° to −18° (0.14 % worse), fixed by re-evaluating the best's louver neighbours. (2, 4):
     a night with a flat cost, where the screening ranks the angles the wrong way round;
     evaluating only the neighbours of the screened best left 0.10 %: stage 3 must still
-    walk from the full-resolution best."""
+    walk from the full-resolution best. (8, 110): cooling; with all dampers open the flows
+    switch pattern twice within the horizon at one-minute steps, which the 300 s screening
+    cannot show (its Q_air of the other sign, the set screened 24 % above the best): 4.6 %
+    above brute force until the all-open set at the screened best louver position was always
+    evaluated at full resolution."""
     problem = random_problems(suwon, index + 1, seed=seed)[index]
     ref = brute_force(suwon, mpc.model, mpc.optics, problem, or_step_pct=1.0)
     d = mpc.decide(problem)
