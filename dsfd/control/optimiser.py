@@ -165,10 +165,12 @@ class MpcOptimiser:
 
     Stages: (1) screening of every louver position × damper set × coarse OR with a coarse
     time step; (2) at full resolution, the best screened candidates, the best of every
-    damper set that screened close to the best, and OR brackets of the best pairs;
-    (3) parabolic OR refinement of the best pair at full resolution. The decision is the
-    best full-resolution candidate. Building the optimiser once per panel keeps its models
-    and optics caches.
+    damper set that screened close to the best, the all-open set at the best louver
+    position, OR brackets of the best pairs and the louver neighbours of the best pair;
+    (3) only if needed, the louver neighbours of the full-resolution best not evaluated
+    yet, and (``or_refine_rounds`` > 0) parabolic OR refinement of the best pair. The
+    decision is the best full-resolution candidate. Building the optimiser once per panel
+    keeps its models and optics caches.
     """
 
     def __init__(self, cfg: PanelConfig, model: LumpedModel | None = None,
@@ -213,9 +215,9 @@ class MpcOptimiser:
         finalists = _finalists(s_terms.cost_j, all_r, ctl.full_candidates,
                                ctl.finalist_margin_pct)
         # The all-open set at every coarse OR at the screened best louver position: its
-        # one-node flows can settle on another branch over the coarse step than over
-        # one-minute steps (Q_air of the other sign; cost 25 % off, seen), a distortion no
-        # margin bounds, while the louver ranking the screening gets right.
+        # flows can switch pattern twice within the horizon at one-minute steps, which the
+        # coarse step cannot represent (Q_air of the other sign, cost 25 % off, seen) — a
+        # distortion no margin bounds, while the louver ranking the screening gets right.
         finalists = np.union1d(finalists, np.flatnonzero(
             (all_a == all_a[int(np.argmin(s_terms.cost_j))]) & (all_r == ALL_OPEN)))
         fa, fr, fo = all_a[finalists], all_r[finalists], all_o[finalists]
@@ -247,6 +249,7 @@ class MpcOptimiser:
         # neighbouring angles by a tenth of a per cent) and parabolic refinement of the
         # best pair's OR, one batch per round.
         na, nr, new = _louver_neighbours(best, n_a, ctl.louver_neighbours, fa, fr, fo)
+        batches = 0
         for round_ in range(max(1, ctl.or_refine_rounds)):
             same = (fa == best.angle_idx) & (fr == best.regime)
             spread = float(np.ptp(terms.cost_j[same])) if same.sum() > 1 else 0.0
@@ -260,12 +263,14 @@ class MpcOptimiser:
             if new.size == 0:
                 break
             t3, l3 = full.evaluate(na, nr, new)
+            batches += 1
             best = best.better(_Best.of(t3, l3, na, nr, new))
             fa, fr, fo = (np.concatenate(v) for v in ((fa, na), (fr, nr), (fo, new)))
             terms = CostTerms(*(np.concatenate(v) for v in zip(terms, t3, strict=True)))
             na, nr, new = np.zeros(0, int), np.zeros(0, int), np.zeros(0)  # neighbours: once
-        trace.append(f"stage 3: louver neighbours and OR refined, best "
-                     f"{best.describe(angles)}")
+        trace.append(f"stage 3: {batches} batch(es) of louver neighbours and OR points, best "
+                     f"{best.describe(angles)}" if batches else
+                     "stage 3: not needed (the best's louver neighbours were evaluated)")
         return best.decision(angles, method="mpc",
                              rollouts=full.rollouts + screen.rollouts, trace=tuple(trace))
 
