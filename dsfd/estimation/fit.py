@@ -224,9 +224,12 @@ def fit_window(problem: WindowProblem, space: ParameterSpace, *, prior_phi: np.n
                          message="nothing to fit")
     r0 = fun(x0)
     cost0 = 0.5 * float(r0 @ r0)
+    # The subspace solver ("lsmr") needs two free variables: with one, SciPy's 2-D trust
+    # region indexes past a 1×1 matrix (IndexError); the dense SVD of an m×1 Jacobian is
+    # trivial anyway.
     res = least_squares(fun, x0, jac=jac, bounds=(lo, hi), method="trf", loss="linear",
                         x_scale=space.prior_sd[idx], max_nfev=max_nfev, ftol=1e-5,
-                        xtol=1e-5, gtol=1e-8, tr_solver="lsmr")
+                        xtol=1e-5, gtol=1e-8, tr_solver="lsmr" if idx.size > 1 else "exact")
     x = res.x if res.cost <= cost0 else x0
     cov = np.array(prior_cov, float)
     cov[idx, :] = 0.0
