@@ -74,14 +74,20 @@ def test_one_node_solver_equals_corrected_closed_form(geom):
     assert checked > 400
 
 
-def test_one_node_conserves_mass_and_is_monotone(geom):
-    rng = np.random.default_rng(2)
-    n = 200
+def _random_cavities(geom, seed: int, or_min: float, n: int = 200):
+    """Boundary pressures and densities, cavity densities and loss coefficients of ``n``
+    random all-open cavities (openings from ``or_min`` to fully open)."""
+    rng = np.random.default_rng(seed)
     bnd = _bnd(rng.uniform(-10, 30, n), 22.0 + 0 * rng.uniform(size=n), rng.uniform(0, 10, n),
                rng.uniform(-0.6, 0.7, n), rng.uniform(-0.7, 0.8, n))
     p_b, rho_b, _ = boundary_state(bnd, geom)
     rho_c = air_density(rng.uniform(260, 340, n), bnd.p_atm_pa)
-    k = opening_resistance(rng.uniform(0, 1, n), rng.uniform(5, 3000, n), geom)
+    k = opening_resistance(rng.uniform(or_min, 1, n), rng.uniform(5, 3000, n), geom)
+    return p_b, rho_b, rho_c, k
+
+
+def test_one_node_conserves_mass_and_is_monotone(geom):
+    p_b, rho_b, rho_c, k = _random_cavities(geom, seed=2, or_min=0.0)
     m, p_c, _ = one_node_flows(p_b, rho_b, geom.z_m, k, rho_c, geom.dp_reg_pa)
     np.testing.assert_allclose(m.sum(axis=1), 0.0, atol=1e-12)
     # Raising the cavity pressure can only reduce every inflow.
@@ -97,13 +103,7 @@ def test_one_node_pressure_tangent_matches_a_re_solve(geom):
     """dP_c/dρ_c from implicit differentiation equals the central difference of two full
     solves; it is the warm start of the coupling's re-solves, so a wrong sign or factor
     would only cost iterations, but a right one has to predict P_c to second order."""
-    rng = np.random.default_rng(4)
-    n = 200
-    bnd = _bnd(rng.uniform(-10, 30, n), 22.0 + 0 * rng.uniform(size=n), rng.uniform(0, 10, n),
-               rng.uniform(-0.6, 0.7, n), rng.uniform(-0.7, 0.8, n))
-    p_b, rho_b, _ = boundary_state(bnd, geom)
-    rho_c = air_density(rng.uniform(260, 340, n), bnd.p_atm_pa)
-    k = opening_resistance(rng.uniform(0.05, 1, n), rng.uniform(5, 3000, n), geom)
+    p_b, rho_b, rho_c, k = _random_cavities(geom, seed=4, or_min=0.05)
     sol = one_node_flows(p_b, rho_b, geom.z_m, k, rho_c, geom.dp_reg_pa, tol_kgs=1e-15)
     h = 1e-5 * rho_c
     up, down = (one_node_flows(p_b, rho_b, geom.z_m, k, rho_c + s * h, geom.dp_reg_pa,
