@@ -24,18 +24,21 @@ from dsfd.physics.airflow import (
     AirflowGeometry,
     FlowState,
     boundary_state,
-    one_node_flows,
     opening_resistance,
     orifice_path_mass_flow,
     regularised_power,
 )
 from dsfd.physics.constants import GRAVITY, R_AIR
+from dsfd.physics.one_node import one_node_flows
 
 _EMPTY4 = np.zeros((0, 4))
 #: Mass-balance tolerance of the regime-9 cavity pressure inside the coupling [kg/s]: the
-#: flows are 1e-3..1e-1 kg/s, so this is 1e-8 relative or better — far below what the
-#: coupling tolerance on T5 can resolve — and saves the last Newton iterations.
-ONE_NODE_TOL_KGS = 1e-10
+#: flows are 1e-3..1e-1 kg/s, so this is 1e-5 relative or better, and the heat it leaves
+#: unbalanced (c_p × 1e-8 kg/s × 20 K = 0.2 mW) is far below what the coupling tolerance on
+#: T5 moves (c_p ṁ × 1e-4 K ≈ 5 mW). It saves the last Newton iterations.
+ONE_NODE_TOL_KGS = 1e-8
+#: Columns of :attr:`FlowSetup.p_c_warm`.
+WARM_COLUMNS = 11
 
 # Lookup tables indexed by commanded regime (0 unused): positive-direction inlet/outlet,
 # flow law (0 orifice, 1 power law, 2 all open, 3 closed) and realised labels.
@@ -70,8 +73,9 @@ class FlowSetup(NamedTuple):
     any_power: bool
     any_all_open: bool
     rows_all_open: np.ndarray  # indices of the all-open rows (flat batch)
-    # Warm start of the all-open rows' cavity pressure, (B, 3): the last solution P_c [Pa],
-    # the cavity density it was solved at [kg/m3] and dP_c/dρ_c there [Pa m3/kg] (NaN: none).
+    # Warm start of the all-open rows' cavity pressure, (B, 11): the last solution P_c [Pa],
+    # the cavity density it was solved at [kg/m3], dP_c/dρ_c there [Pa m3/kg], the
+    # boundary pressures p_B (4) [Pa] and ∂P_c/∂p_B (4) [-] (NaN: none).
     p_c_warm: np.ndarray
     dp_boundary: np.ndarray  # p_B,in − p_B,out [Pa]
     dz: np.ndarray  # z_in − z_out [m]
@@ -149,13 +153,14 @@ def flow_setup(
     rows = np.arange(nb)
     z = geom.z_m
     or_eff = np.maximum(or_b, geom.min_opening_ratio)
+    path_gain = ((law <= _LAW_POWER) & (geom.area_m2[inlet] > 0)
+                 & (geom.area_m2[outlet] > 0)).astype(float)
     return FlowSetup(
         regime=regime,
         inlet=inlet,
         outlet=outlet,
         law=law,
-        path_gain=((law <= _LAW_POWER) & (geom.area_m2[inlet] > 0)
-                   & (geom.area_m2[outlet] > 0)).astype(float),
+        path_gain=path_gain,
         label_pos=_LABEL_POS[regime],
         label_neg=_LABEL_NEG[regime],
         any_orifice=bool(np.any(law == _LAW_ORIFICE)),
@@ -163,8 +168,11 @@ def flow_setup(
         any_all_open=bool(np.any(law == _LAW_ALL)) and bool(np.all(geom.area_m2 > 0)),
         rows_all_open=np.flatnonzero(law == _LAW_ALL) if np.all(geom.area_m2 > 0)
         else np.zeros(0, dtype=int),
-        p_c_warm=np.full((nb, 3), np.nan),
-        dp_boundary=p_b[rows, inlet] - p_b[rows, outlet],
+        p_c_warm=np.full((nb, WARM_COLUMNS), np.nan),
+        # Rows without a two-opening path (closed, all open) get a dummy 1 Pa: their path
+        # flow is multiplied by 0, and a zero there would send the whole batch through the
+        # regularised branch of the flow laws at every evaluation.
+        dp_boundary=np.where(path_gain > 0, p_b[rows, inlet] - p_b[rows, outlet], 1.0),
         dz=z[inlet] - z[outlet],
         rho_fwd=rho_b[rows, inlet],
         rho_bwd=rho_b[rows, outlet],
@@ -233,12 +241,19 @@ def path_flows(setup: FlowSetup, t5_k: np.ndarray, geom: AirflowGeometry) -> Pat
         r9 = s.rows_all_open
         rho9 = rho_c[r9]
         warm = s.p_c_warm[r9]
-        tangent = warm[:, 2] * (rho9 - warm[:, 1])
+        p_b9 = s.p_b[r9]
+        # First-order prediction from the last solution: the cavity density moved (the
+        # coupling's next evaluation) and the boundary pressures (the next step's weather).
+        tangent = (warm[:, 2] * (rho9 - warm[:, 1])
+                   + (warm[:, 7:11] * (p_b9 - warm[:, 3:7])).sum(axis=1))
         start = warm[:, 0] + np.where(np.isfinite(tangent), tangent, 0.0)
-        sol = one_node_flows(s.p_b[r9], s.rho_b[r9], geom.z_m, s.k_all[r9], rho9, dp_t,
+        sol = one_node_flows(p_b9, s.rho_b[r9], geom.z_m, s.k_all[r9], rho9, dp_t,
                              p_c_start=start, tol_kgs=ONE_NODE_TOL_KGS)
         # In place: the next evaluation of this step (and the next step) starts here.
-        s.p_c_warm[r9] = np.stack([sol.p_c, rho9, sol.dpc_drho], axis=1)
+        w = s.p_c_warm[r9]
+        w[:, 0], w[:, 1], w[:, 2], w[:, 3:7], w[:, 7:11] = (sol.p_c, rho9, sol.dpc_drho, p_b9,
+                                                            sol.dpc_dpb)
+        s.p_c_warm[r9] = w
         m9 = sol.m_dot
     else:
         m9 = _EMPTY4

@@ -14,13 +14,13 @@ from dsfd.physics.airflow import (
     AirflowGeometry,
     air_density,
     boundary_state,
-    one_node_flows,
     opening_resistance,
     orifice_path_mass_flow,
     path_pressure,
     regularised_power,
 )
 from dsfd.physics.constants import GRAVITY
+from dsfd.physics.one_node import one_node_flows
 from dsfd.physics.regimes import regime_flows
 
 
@@ -88,7 +88,7 @@ def _random_cavities(geom, seed: int, or_min: float, n: int = 200):
 
 def test_one_node_conserves_mass_and_is_monotone(geom):
     p_b, rho_b, rho_c, k = _random_cavities(geom, seed=2, or_min=0.0)
-    m, p_c, _ = one_node_flows(p_b, rho_b, geom.z_m, k, rho_c, geom.dp_reg_pa)
+    m, p_c, *_ = one_node_flows(p_b, rho_b, geom.z_m, k, rho_c, geom.dp_reg_pa)
     np.testing.assert_allclose(m.sum(axis=1), 0.0, atol=1e-12)
     # Raising the cavity pressure can only reduce every inflow.
     head = p_b + rho_c[:, None] * GRAVITY * geom.z_m
@@ -122,6 +122,52 @@ def test_one_node_pressure_tangent_matches_a_re_solve(geom):
     tangent_err = np.abs(sol.p_c + sol.dpc_drho * big - moved)[clear]
     hold_err = np.abs(sol.p_c - moved)[clear]
     assert np.median(tangent_err) < 0.02 * np.median(hold_err)
+
+
+def test_one_node_boundary_sensitivity_matches_a_re_solve(geom):
+    """∂P_c/∂p_B,k (the next step's warm start when the wind or the temperatures change)
+    equals the central difference of full solves, and its rows sum to 1: raising every
+    boundary pressure by the same amount raises the cavity pressure by exactly that."""
+    p_b, rho_b, rho_c, k = _random_cavities(geom, seed=5, or_min=0.05)
+    sol = one_node_flows(p_b, rho_b, geom.z_m, k, rho_c, geom.dp_reg_pa, tol_kgs=1e-15)
+    np.testing.assert_allclose(sol.dpc_dpb.sum(axis=1), 1.0, rtol=1e-12)
+    dp = p_b + rho_c[:, None] * GRAVITY * geom.z_m - sol.p_c[:, None]
+    clear = np.abs(dp).min(axis=1) > 10 * geom.dp_reg_pa
+    assert clear.sum() > 100
+    h = 1e-4
+    for opening in range(4):
+        up, down = (p_b.copy(), p_b.copy())
+        up[:, opening] += h
+        down[:, opening] -= h
+        central = (one_node_flows(up, rho_b, geom.z_m, k, rho_c, geom.dp_reg_pa,
+                                  tol_kgs=1e-15).p_c
+                   - one_node_flows(down, rho_b, geom.z_m, k, rho_c, geom.dp_reg_pa,
+                                    tol_kgs=1e-15).p_c) / (2 * h)
+        np.testing.assert_allclose(sol.dpc_dpb[clear, opening], central[clear], rtol=1e-4,
+                                   atol=1e-9)
+
+
+def test_one_node_warm_start_lands_on_the_cold_solution(geom):
+    """From a warm start the solver may stop at a Newton point it has not evaluated (its
+    flows moved along their tangents); that point must still balance the cavity within
+    the tolerance and agree with a cold, tight solve. Starts from slightly off to far off
+    (beyond an opening's zero-flow point, where the bracketed iteration takes over)."""
+    p_b, rho_b, rho_c, k = _random_cavities(geom, seed=6, or_min=0.02)
+    ref = one_node_flows(p_b, rho_b, geom.z_m, k, rho_c, geom.dp_reg_pa, tol_kgs=1e-15)
+    rng = np.random.default_rng(7)
+    tol = 1e-8
+    for scale in (1e-6, 1e-3, 0.1, 3.0):
+        start = ref.p_c + scale * rng.normal(size=ref.p_c.size)
+        sol = one_node_flows(p_b, rho_b, geom.z_m, k, rho_c, geom.dp_reg_pa, tol_kgs=tol,
+                             p_c_start=start)
+        # Mass balance of the returned flows, and the flows the law gives at that pressure.
+        assert np.abs(sol.m_dot.sum(axis=1)).max() <= tol
+        np.testing.assert_allclose(sol.m_dot, ref.m_dot, rtol=0, atol=1e-6)
+        head = p_b + rho_c[:, None] * GRAVITY * geom.z_m
+        dp = head - sol.p_c[:, None]
+        law = regularised_power(dp, np.sqrt(2 * np.where(dp > 0, rho_b, rho_c[:, None]) / k),
+                                0.5, geom.dp_reg_pa)
+        assert np.abs(law - sol.m_dot).max() <= 10 * tol
 
 
 def test_regime_ten_gives_zero_flow(geom):

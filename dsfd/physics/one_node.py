@@ -1,0 +1,186 @@
+"""The one-node cavity: all four openings open (regime 9, physics §8.4.4, errata E13).
+
+With every damper open the cavity pressure P_c is the unknown of one mass balance,
+Σ_k ṁ_k(P_c) = 0, each opening an orifice (square-root law, regularised near zero flow:
+errata E10). Σṁ is strictly decreasing in P_c, so the root is unique. The coupling of the
+thermal model re-solves it at every evaluation of the cavity temperature, so the solver
+is built for warm starts: from a start predicted along the solution's sensitivities it
+takes plain Newton steps, and stops at a Newton point it has not evaluated when the
+residual there is provably below the tolerance; anything else goes to Newton's method
+inside a shrinking bracket.
+
+The opening laws are those of :mod:`dsfd.physics.airflow` (regularised as in the IBPSA
+Modelica library's ``Airflow.Multizone``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import NamedTuple
+
+import numpy as np
+
+from dsfd.physics.airflow import _regularised_power_slope, regularised_power
+from dsfd.physics.constants import GRAVITY
+
+#: Unbracketed Newton steps from a warm start before the bracketed iteration takes over.
+_WARM_NEWTON_STEPS = 4
+
+
+class OneNodeFlow(NamedTuple):
+    """Solution of the one-node cavity (:func:`one_node_flows`).
+
+    Attributes
+    ----------
+    m_dot : ndarray (B, 4), [kg/s]
+        Mass flows into the cavity.
+    p_c : ndarray (B,), [Pa]
+        Cavity pressure at z = 0.
+    dpc_drho : ndarray (B,), [Pa/(kg/m3)]
+        dP_c/dρ_c at the solution, boundary pressures held (NaN where no opening is
+        open): the tangent that predicts P_c for a nearby cavity density, so that a
+        re-solve inside the coupling starts within Newton's quadratic range.
+    dpc_dpb : ndarray (B, 4), [-]
+        ∂P_c/∂p_B,k: the share of each opening's boundary-pressure change that the cavity
+        pressure follows (the openings' flow slopes over their sum; rows sum to 1). With
+        ``dpc_drho`` it predicts P_c of the next step, whose wind and temperatures differ.
+    """
+
+    m_dot: np.ndarray
+    p_c: np.ndarray
+    dpc_drho: np.ndarray
+    dpc_dpb: np.ndarray
+
+
+def one_node_flows(
+    p_b: np.ndarray,
+    rho_b: np.ndarray,
+    z: np.ndarray,
+    k: np.ndarray,
+    rho_c: np.ndarray,
+    dp_t: float,
+    *,
+    tol_kgs: float = 1e-15,
+    max_iter: int = 100,
+    p_c_start: np.ndarray | None = None,
+) -> OneNodeFlow:
+    """General one-node cavity flow solver (physics §8.4.4).
+
+    Solves Σ_k ṁ_k(P_c) = 0 for the cavity pressure P_c at z = 0, where
+    ṁ_k = reg(Δp_k; C_k = sqrt(2 ρ_up,k / K_k)), Δp_k = p_B,k − (P_c − ρ_c g z_k),
+    ρ_up,k = ρ_B,k for inflow and ρ_c for outflow. Σṁ is strictly decreasing in P_c, so
+    a safeguarded Newton iteration inside a shrinking bracket converges to the unique root.
+
+    Parameters
+    ----------
+    p_b, rho_b : arrays (B, 4), [Pa], [kg/m3]
+        Boundary pressure and density outside each opening.
+    z : array (4,), [m]
+        Opening heights.
+    k : array (B, 4), [1/m4]
+        Loss coefficients (inf = closed).
+    rho_c : array (B,), [kg/m3]
+        Cavity air density.
+    dp_t : float, [Pa]
+        Regularisation threshold.
+    p_c_start : array (B,), optional, [Pa]
+        Starting guesses (e.g. the previous solution); NaN or outside the bracket means
+        "use the conductance-weighted mean head".
+
+    Returns
+    -------
+    OneNodeFlow
+    """
+    inv_k = 1.0 / k  # 0 where closed (k = inf)
+    head = p_b + rho_c[:, None] * (GRAVITY * z)  # Δp_k = head_k − P_c
+    # Flow coefficients for inflow (boundary air) and outflow (cavity air) of each opening.
+    c_in = np.sqrt(2.0 * rho_b * inv_k)
+    c_out = np.sqrt((2.0 * rho_c)[:, None] * inv_k)
+
+    def total(pc: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """ṁ_k, Σṁ, dṁ_k/dΔp_k and |Δp_k| at cavity pressure ``pc``."""
+        dp = head - pc[:, None]
+        coef = np.where(dp > 0, c_in, c_out)
+        mag = np.abs(dp)
+        if mag.min() >= dp_t:  # usual case: plain orifice law, no regularisation needed
+            root = np.sqrt(mag)
+            m = coef * np.copysign(root, dp)
+            return m, m.sum(axis=1), 0.5 * coef / root, mag
+        m = regularised_power(dp, coef, 0.5, dp_t)
+        return m, m.sum(axis=1), _regularised_power_slope(dp, coef, 0.5, dp_t), mag
+
+    def result(m: np.ndarray, slope: np.ndarray, pc: np.ndarray) -> OneNodeFlow:
+        # Implicit differentiation of Σṁ(P_c, ρ_c, p_B) = 0: ∂Σṁ/∂ρ_c = Σ ṁ'_k g z_k (the
+        # cavity column) + Σ_out ṁ_k/(2ρ_c) (outflows carry cavity air, C ∝ √ρ_c), and
+        # ∂Σṁ/∂p_B,k = ṁ'_k; both over ∂Σṁ/∂P_c = −Σ ṁ'_k.
+        d_rho = slope @ (GRAVITY * z) + np.minimum(m, 0.0).sum(axis=1) / (2.0 * rho_c)
+        d_pc = slope.sum(axis=1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inv = np.where(d_pc > 0, 1.0 / d_pc, np.nan)
+        return OneNodeFlow(m, pc, d_rho * inv, slope * inv[:, None])
+
+    if p_c_start is not None and np.isfinite(p_c_start).all():
+        # Warm start (the coupling's re-solves): plain Newton while no step can cross an
+        # opening's zero-flow point, where each term is smooth and monotone. The last
+        # Newton point is accepted without evaluating it when its residual is provably
+        # small: a step δ leaves |Σṁ| ≤ ½ δ² Σ|ṁ''_k|, |ṁ''_k| = ṁ'_k / (2|Δp_k|) for the
+        # square-root law (the regularised band bounded as at its edge), and the flows
+        # moved along their tangents balance exactly.
+        pc = np.asarray(p_c_start, float)
+        for _ in range(_WARM_NEWTON_STEPS):
+            m_dot, s, slope, mag = total(pc)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                step = s / slope.sum(axis=1)
+            step = np.where(np.abs(s) <= tol_kgs, 0.0, step)
+            mag = np.maximum(mag, dp_t)
+            if not np.all(np.abs(step) <= 0.5 * mag.min(axis=1)):
+                break  # a zero-flow point may be crossed (or nothing is open): bracket
+            if np.all(0.5 * step * step * (slope / (2.0 * mag)).sum(axis=1) <= tol_kgs):
+                return result(m_dot - slope * step[:, None], slope, pc + step)
+            pc = pc + step
+        p_c_start = pc
+    return _bracketed_newton(total, result, head, inv_k, tol_kgs, max_iter, p_c_start)
+
+
+def _bracketed_newton(total: Callable[[np.ndarray], tuple[np.ndarray, ...]],
+                      result: Callable[[np.ndarray, np.ndarray, np.ndarray], OneNodeFlow],
+                      head: np.ndarray, inv_k: np.ndarray, tol_kgs: float, max_iter: int,
+                      p_c_start: np.ndarray | None) -> OneNodeFlow:
+    """Newton's method inside a shrinking bracket for :func:`one_node_flows`."""
+    open_ = inv_k > 0
+    # Bracket of P_c: the open openings' heads ± 1 Pa.
+    if open_.all():
+        lo, hi = head.min(axis=1) - 1.0, head.max(axis=1) + 1.0
+    else:
+        lo = np.where(open_, head, np.inf).min(axis=1) - 1.0
+        hi = np.where(open_, head, -np.inf).max(axis=1) + 1.0
+        lo = np.where(np.isfinite(lo), lo, 0.0)
+        hi = np.where(np.isfinite(hi), hi, 0.0)
+    usable = (np.zeros(lo.shape, bool) if p_c_start is None
+              else np.isfinite(p_c_start) & (p_c_start > lo) & (p_c_start < hi))
+    if usable.all():
+        pc = p_c_start
+    else:  # start from the conductance-weighted mean head (exact for linear openings)
+        w = np.sqrt(inv_k)
+        pc = np.where(w.sum(axis=1) > 0, (np.where(open_, head, 0.0) * w).sum(axis=1)
+                      / np.maximum(w.sum(axis=1), 1e-300), 0.5 * (lo + hi))
+        if p_c_start is not None:
+            pc = np.where(usable, p_c_start, pc)
+    # The whole batch iterates together (batches are small; converged rows stay put), which
+    # is cheaper than re-indexing the unfinished rows every iteration.
+    for _ in range(max_iter):
+        m_dot, s, slope, _ = total(pc)
+        ds = -slope.sum(axis=1)
+        # Bracket update: s > 0 means P_c is too low.
+        too_low = s > 0
+        lo = np.where(too_low, pc, lo)
+        hi = np.where(too_low, hi, pc)
+        done = (np.abs(s) <= tol_kgs) | (hi - lo <= 1e-13 * (1 + np.abs(pc)))
+        if done.all():
+            return result(m_dot, slope, pc)
+        # ds < 0 wherever an opening is open; elsewhere the step falls outside → bisect.
+        newton = pc - s / np.where(ds < 0, ds, -1.0)
+        inside = (newton > lo) & (newton < hi)
+        pc = np.where(done, pc, np.where(inside, newton, 0.5 * (lo + hi)))
+    m_dot, _, slope, _ = total(pc)
+    return result(m_dot, slope, pc)
