@@ -115,8 +115,7 @@ def one_node_flows(
         # ∂Σṁ/∂p_B,k = ṁ'_k; both over ∂Σṁ/∂P_c = −Σ ṁ'_k.
         d_rho = slope @ (GRAVITY * z) + np.minimum(m, 0.0).sum(axis=1) / (2.0 * rho_c)
         d_pc = slope.sum(axis=1)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            inv = np.where(d_pc > 0, 1.0 / d_pc, np.nan)
+        inv = np.divide(1.0, d_pc, out=np.full(d_pc.shape, np.nan), where=d_pc > 0)
         return OneNodeFlow(m, pc, d_rho * inv, slope * inv[:, None])
 
     if p_c_start is not None and np.isfinite(p_c_start).all():
@@ -129,8 +128,8 @@ def one_node_flows(
         pc = np.asarray(p_c_start, float)
         for _ in range(_WARM_NEWTON_STEPS):
             m_dot, s, slope, mag = total(pc)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                step = s / slope.sum(axis=1)
+            ds = slope.sum(axis=1)  # 0 only where nothing is open: then inf → bracketed
+            step = np.divide(s, ds, out=np.full(ds.shape, np.inf), where=ds > 0)
             step = np.where(np.abs(s) <= tol_kgs, 0.0, step)
             mag = np.maximum(mag, dp_t)
             if not np.all(np.abs(step) <= 0.5 * mag.min(axis=1)):

@@ -93,8 +93,11 @@ def solve_fixed_point(
         if rows.size == 0:
             break
         br, fbr, cr, fcr, ar = b[rows], fb[rows], c[rows], fc[rows], a[rows]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            sec = br - fbr * (br - cr) / (fbr - fcr)
+        # (no errstate context here: this loop runs every coupling evaluation; a zero
+        # denominator is masked, NaNs propagate silently and are caught by isfinite)
+        den = fbr - fcr
+        sec = br - np.divide(fbr * (br - cr), den, out=np.full(den.shape, np.nan),
+                             where=den != 0)
         sec = np.where(np.isfinite(sec), sec, br + fbr)
         bracketed = np.isfinite(ar)
         # Before bracketing: move towards the sign of h, at most max_step.
