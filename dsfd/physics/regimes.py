@@ -37,8 +37,9 @@ _EMPTY4 = np.zeros((0, 4))
 #: unbalanced (c_p × 1e-8 kg/s × 20 K = 0.2 mW) is far below what the coupling tolerance on
 #: T5 moves (c_p ṁ × 1e-4 K ≈ 5 mW). It saves the last Newton iterations.
 ONE_NODE_TOL_KGS = 1e-8
-#: Columns of :attr:`FlowSetup.p_c_warm`.
-WARM_COLUMNS = 11
+#: Columns of :attr:`FlowSetup.p_c_warm`: P_c, ρ_c, dP_c/dρ_c, p_B (4), ∂P_c/∂p_B (4).
+_W_PC, _W_RHO, _W_DRHO, _W_PB, _W_DPB = 0, 1, 2, slice(3, 7), slice(7, 11)
+WARM_COLUMNS = _W_DPB.stop
 
 # Lookup tables indexed by commanded regime (0 unused): positive-direction inlet/outlet,
 # flow law (0 orifice, 1 power law, 2 all open, 3 closed) and realised labels.
@@ -244,16 +245,16 @@ def path_flows(setup: FlowSetup, t5_k: np.ndarray, geom: AirflowGeometry) -> Pat
         p_b9 = s.p_b[r9]
         # First-order prediction from the last solution: the cavity density moved (the
         # coupling's next evaluation) and the boundary pressures (the next step's weather).
-        tangent = (warm[:, 2] * (rho9 - warm[:, 1])
-                   + (warm[:, 7:11] * (p_b9 - warm[:, 3:7])).sum(axis=1))
-        start = warm[:, 0] + np.where(np.isfinite(tangent), tangent, 0.0)
+        tangent = (warm[:, _W_DRHO] * (rho9 - warm[:, _W_RHO])
+                   + (warm[:, _W_DPB] * (p_b9 - warm[:, _W_PB])).sum(axis=1))
+        start = warm[:, _W_PC] + np.where(np.isfinite(tangent), tangent, 0.0)
         sol = one_node_flows(p_b9, s.rho_b[r9], geom.z_m, s.k_all[r9], rho9, dp_t,
                              p_c_start=start, tol_kgs=ONE_NODE_TOL_KGS)
-        # In place: the next evaluation of this step (and the next step) starts here.
-        w = s.p_c_warm[r9]
-        w[:, 0], w[:, 1], w[:, 2], w[:, 3:7], w[:, 7:11] = (sol.p_c, rho9, sol.dpc_drho, p_b9,
-                                                            sol.dpc_dpb)
-        s.p_c_warm[r9] = w
+        # In place: the next evaluation of this step (and the next step) starts here
+        # (``warm`` is a copy of those rows, every column of it overwritten).
+        warm[:, _W_PC], warm[:, _W_RHO], warm[:, _W_DRHO] = sol.p_c, rho9, sol.dpc_drho
+        warm[:, _W_PB], warm[:, _W_DPB] = p_b9, sol.dpc_dpb
+        s.p_c_warm[r9] = warm
         m9 = sol.m_dot
     else:
         m9 = _EMPTY4
