@@ -20,7 +20,7 @@ from dsfd.physics.airflow import (
     regularised_power,
 )
 from dsfd.physics.constants import GRAVITY
-from dsfd.physics.one_node import one_node_flows
+from dsfd.physics.one_node import _warm_rows, one_node_flows
 from dsfd.physics.regimes import regime_flows
 
 
@@ -147,11 +147,13 @@ def test_one_node_boundary_sensitivity_matches_a_re_solve(geom):
                                    atol=1e-9)
 
 
-def test_one_node_warm_start_lands_on_the_cold_solution(geom):
+@pytest.mark.parametrize("scalar_max_rows", [0, 1000])
+def test_one_node_warm_start_lands_on_the_cold_solution(geom, scalar_max_rows):
     """From a warm start the solver may stop at a Newton point it has not evaluated (its
     flows moved along their tangents); that point must still balance the cavity within
     the tolerance and agree with a cold, tight solve. Starts from slightly off to far off
-    (beyond an opening's zero-flow point, where the bracketed iteration takes over)."""
+    (beyond an opening's zero-flow point, where the bracketed iteration takes over); the
+    vectorised iteration (0) and the row-by-row one on Python floats (1000) alike."""
     p_b, rho_b, rho_c, k = _random_cavities(geom, seed=6, or_min=0.02)
     ref = one_node_flows(p_b, rho_b, geom.z_m, k, rho_c, geom.dp_reg_pa, tol_kgs=1e-15)
     rng = np.random.default_rng(7)
@@ -159,7 +161,7 @@ def test_one_node_warm_start_lands_on_the_cold_solution(geom):
     for scale in (1e-6, 1e-3, 0.1, 3.0):
         start = ref.p_c + scale * rng.normal(size=ref.p_c.size)
         sol = one_node_flows(p_b, rho_b, geom.z_m, k, rho_c, geom.dp_reg_pa, tol_kgs=tol,
-                             p_c_start=start)
+                             p_c_start=start, scalar_max_rows=scalar_max_rows)
         # Mass balance of the returned flows, and the flows the law gives at that pressure.
         assert np.abs(sol.m_dot.sum(axis=1)).max() <= tol
         np.testing.assert_allclose(sol.m_dot, ref.m_dot, rtol=0, atol=1e-6)
@@ -168,6 +170,26 @@ def test_one_node_warm_start_lands_on_the_cold_solution(geom):
         law = regularised_power(dp, np.sqrt(2 * np.where(dp > 0, rho_b, rho_c[:, None]) / k),
                                 0.5, geom.dp_reg_pa)
         assert np.abs(law - sol.m_dot).max() <= 10 * tol
+
+
+def test_one_node_scalar_warm_start_matches_the_vectorised_one(geom):
+    """The row-by-row warm iteration gives the vectorised one's flows, pressure and
+    sensitivities, row by row (it is used for the few all-open rows of a rollout)."""
+    p_b, rho_b, rho_c, k = _random_cavities(geom, seed=8, or_min=0.02, n=60)
+    ref = one_node_flows(p_b, rho_b, geom.z_m, k, rho_c, geom.dp_reg_pa, tol_kgs=1e-15)
+    start = ref.p_c + 1e-4 * np.random.default_rng(9).normal(size=ref.p_c.size)
+    used = 0
+    for i in range(p_b.shape[0]):
+        row = slice(i, i + 1)
+        args = (p_b[row], rho_b[row], geom.z_m, k[row], rho_c[row], geom.dp_reg_pa)
+        scalar = _warm_rows(*args, 1e-10, start[row])
+        if scalar is None:  # not accepted within the step limit: the vectorised path solves
+            continue
+        used += 1
+        vec = one_node_flows(*args, tol_kgs=1e-10, p_c_start=start[row], scalar_max_rows=0)
+        for a, b in zip(scalar, vec, strict=True):
+            np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-12)
+    assert used >= 50
 
 
 def test_regime_ten_gives_zero_flow(geom):
