@@ -228,6 +228,7 @@ class LumpedModel:
         xs[:, 0] = x
         cols = []
         guess = slope = None
+        last_slope = np.full(nb, np.nan)
         ahead, predicted = np.zeros(nb), np.zeros(nb, bool)
         for k in range(horizon):
             res = coupled_step(nc, x, inp.at((slice(None), k)), theta[:, k],
@@ -235,15 +236,19 @@ class LumpedModel:
             cols.append(res)
             # Warm start: under unchanged controls the cavity air moves as this step's
             # network predicts, corrected by how far that prediction missed this step
-            # (the weather and the linearisation drift smoothly), and the coupling keeps
-            # its slope; after a control change start from the state.
+            # (the weather and the linearisation drift smoothly), and the coupling's slope
+            # follows its drift over the last two steps; after a control change start
+            # from the state.
             if k + 1 < horizon:
                 same = (regime[:, k + 1] == regime[:, k]) & (or_[:, k + 1] == or_[:, k])
                 # (the miss counts only if step k was predicted under its own controls)
                 miss = np.where(same & predicted, res.x_next[:, 4] - ahead, 0.0)
                 ahead, predicted = res.t5_ahead_k, same
                 guess = np.where(same, ahead + miss, res.x_next[:, 4])
-                slope = np.where(same, res.coupling_slope, np.nan)
+                trend = res.coupling_slope - last_slope
+                trend = np.where(np.isfinite(trend), trend, 0.0)
+                slope = np.where(same, res.coupling_slope + trend, np.nan)
+                last_slope = np.where(same, res.coupling_slope, np.nan)
                 if setup.any_all_open:  # the all-open cavity pressure changes little too
                     setup.p_c_warm[:, k + 1] = setup.p_c_warm[:, k]
             x = res.x_next
