@@ -159,8 +159,7 @@ def _solve_response(
     return Response(cell, fate, diffuse)
 
 
-@lru_cache(maxsize=64)
-def _cached_response(
+def _frozen_response(
     phi_bytes: bytes, shape: tuple[int, ...], width: float, pitch: float, rho_upper: float,
     rho_lower: float, segments: int,
 ) -> Response:
@@ -171,6 +170,13 @@ def _cached_response(
     return out
 
 
+# Angle grids (the controller's 11 positions, a few entries reused every decision) and single
+# angles (a continuous search such as paper-SQP: hundreds of new ones per decision) are cached
+# apart, so that a continuous search cannot evict the grid.
+_cached_grid = lru_cache(maxsize=64)(_frozen_response)
+_cached_single = lru_cache(maxsize=256)(_frozen_response)
+
+
 def cell_response(
     phi: FloatArray, width: float, pitch: float, rho_upper: float, rho_lower: float,
     segments: int, *, cache: bool = True,
@@ -178,8 +184,9 @@ def cell_response(
     """Solve (or fetch from the cache) the cell radiosity response for slat angles ``phi``."""
     if cache and phi.size <= _CACHE_MAX_SIZE:
         key = np.ascontiguousarray(phi.ravel(), dtype=float)  # ravel: keep 0-d via phi.shape
-        return _cached_response(key.tobytes(), phi.shape, float(width), float(pitch),
-                                float(rho_upper), float(rho_lower), int(segments))
+        cached = _cached_grid if phi.size > 1 else _cached_single
+        return cached(key.tobytes(), phi.shape, float(width), float(pitch), float(rho_upper),
+                      float(rho_lower), int(segments))
     return _solve_response(phi, width, pitch, rho_upper, rho_lower, segments)
 
 
