@@ -31,9 +31,9 @@ from dsfd.physics.constants import GRAVITY
 #: Unbracketed Newton steps from a warm start before the bracketed iteration takes over.
 _WARM_NEWTON_STEPS = 4
 #: Largest batch whose warm start is iterated row by row on Python floats. A vectorised
-#: Newton step is ~50 numpy calls of 1–2 µs each whatever the batch size, the scalar one
-#: ~5 µs a row: the optimiser's full-resolution rollouts carry a few all-open rows, and
-#: the coupling's later evaluations only the rows still iterating.
+#: Newton solve is ~50 numpy calls of 1–2 µs each whatever the batch size, the scalar one
+#: ~3 µs plus ~10 µs a row: the optimiser's full-resolution rollouts carry a few all-open
+#: rows, and the coupling's later evaluations only the rows still iterating.
 SCALAR_MAX_ROWS = 8
 
 
