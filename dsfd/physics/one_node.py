@@ -35,6 +35,9 @@ _WARM_NEWTON_STEPS = 4
 #: ~3 µs plus ~10 µs a row: the optimiser's full-resolution rollouts carry a few all-open
 #: rows, and the coupling's later evaluations only the rows still iterating.
 SCALAR_MAX_ROWS = 8
+#: Bound on the regularising polynomial's curvature for m = ½ in units of C Δp_t^-1.5 (its
+#: maximum is 1.56): the acceptance bound of the warm Newton steps inside the band.
+_BAND_CURVATURE = 1.6
 
 
 class OneNodeFlow(NamedTuple):
@@ -159,7 +162,7 @@ def one_node_flows(
             end = dp - step[:, None]
             u = np.minimum(np.abs(dp), np.abs(end))
             curv = coef * np.where(u >= dp_t, 0.25 * np.maximum(u, dp_t) ** -1.5,
-                                   1.6 * dp_t**-1.5)
+                                   _BAND_CURVATURE * dp_t**-1.5)
             smooth = (end * dp > 0) | (step == 0.0)[:, None]
             if smooth.all() and (0.5 * step * step * curv.sum(axis=1) <= tol_kgs).all():
                 return result(m_dot - slope * step[:, None], slope, pc + step)
@@ -179,7 +182,7 @@ def _warm_rows(p_b: np.ndarray, rho_b: np.ndarray, z: np.ndarray, k: np.ndarray,
     """
     a, b, c, d = _poly_coefficients_scalar(0.5)
     sqrt_t = math.sqrt(dp_t)
-    band_curvature = 1.6 * dp_t**-1.5
+    band_curvature = _BAND_CURVATURE * dp_t**-1.5
     gz = (GRAVITY * np.asarray(z, float)).tolist()
     rows = []
     for pb, rb, kk, rho, pc in zip(p_b.tolist(), rho_b.tolist(), k.tolist(), rho_c.tolist(),
