@@ -36,7 +36,7 @@ class CalibrationState:
     panel_id : str
     theta : ndarray (14,)
         Current estimate ϑ̂ = (θ̂, q̂): h [W/(m2 K)], f [-], c [m3/(s Pa^n)], n [-] and the
-        heat-flux offsets q_x1..q_x5 [W/m2] (:mod:`dsfd.estimation.params`).
+        heat-flux offsets q_x1..q_x4 [W/m2] (:mod:`dsfd.estimation.params`).
     cov_phi : ndarray (14, 14)
         Covariance of ϑ̂ in the fitting coordinates (log θ; n and q linear).
     prior_theta : ndarray (14,)
