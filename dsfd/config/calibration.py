@@ -110,9 +110,8 @@ class Calibration:
         0.05, doc="Random-walk growth of the prior spread of log θ per √hour, so the "
         "estimate can follow slow changes of the panel", unit="1/sqrt(h)", ge=0, le=5)
     heat_offsets: bool = setting(
-        True, doc="Also fit a constant heat-flux offset on each measured node, the cavity air "
-        "included (unmodelled sky, irradiance, stratification and sensor effects; "
-        "offset-free estimation)")
+        True, doc="Also fit a constant heat-flux offset on each measured glass/louver node "
+        "(unmodelled sky, irradiance and sensor effects; offset-free estimation)")
     offset_sd_wm2: float = setting(
         20.0, doc="Prior spread of the heat-flux offsets", unit="W/m2", gt=0, le=1000)
     offset_bound_wm2: float = setting(

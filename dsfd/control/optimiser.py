@@ -49,8 +49,8 @@ class ControlProblem:
         Louver angle now (for the move penalty and the SQP start).
     previous_afr : int or None
     previous_or_pct : float or None, [%]
-    heat_offsets_wm2 : ndarray (5,) or None, [W/m2]
-        Calibrated heat-flux offsets on nodes x1..x5 (the self-calibration's input
+    heat_offsets_wm2 : ndarray (4,) or None, [W/m2]
+        Calibrated heat-flux offsets on nodes x1..x4 (the self-calibration's input
         disturbance, :mod:`dsfd.estimation.params`), added to the absorbed short-wave so
         that the horizon is predicted by the same model the state estimate comes from.
     """

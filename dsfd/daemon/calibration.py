@@ -74,8 +74,8 @@ class CalibrationStage:
 
     @property
     def offsets(self) -> np.ndarray:
-        """The calibrated heat-flux offsets q (5,) [W/m2] added to the absorbed short-wave
-        of nodes 1-4 and to the cavity air (zeros if the estimate has none)."""
+        """The calibrated heat-flux offsets q [W/m2] added to the absorbed short-wave of
+        nodes 1-4 (zeros if the estimate has none)."""
         return full_vector(self.calibrator.state.theta)[N_PARAMS:].copy()
 
     @property

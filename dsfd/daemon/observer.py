@@ -89,8 +89,8 @@ class StateObserver:
             Actuator position during that step.
         theta : ndarray (9,)
             Current parameter estimate.
-        offsets : ndarray (5,), optional, [W/m2]
-            Calibrated heat-flux offsets of nodes 1-5 (the calibrator's disturbance model).
+        offsets : ndarray (4,), optional, [W/m2]
+            Calibrated heat-flux offsets of nodes 1-4 (the calibrator's disturbance model).
         """
         y = np.array([y_c.get(n, np.nan) for n in STATE_SIGNALS], float) + T_ZERO
         measured = np.isfinite(y)

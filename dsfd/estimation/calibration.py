@@ -101,9 +101,9 @@ class OnlineCalibrator:
         self.settings = settings or model.cfg.calibration
         self.space = ParameterSpace.from_panel(model.cfg, self.settings)
         self.state = state or CalibrationState.initial(model.cfg.panel.id, self.space)
-        #: Low-passed innovations of x1..x5 [K] driving the offset tracking (filter state,
+        #: Low-passed innovations of x1..x4 [K] driving the offset tracking (filter state,
         #: not persisted: it settles within a few smoothing time constants).
-        self._innovation = np.zeros(len(I_Q))
+        self._innovation = np.zeros(4)
 
     @property
     def theta(self) -> np.ndarray:
@@ -192,7 +192,7 @@ class OnlineCalibrator:
         cfg, sp = self.settings, self.space
         if cfg.offset_tracking_s <= 0 or not steps.valid[k]:
             return
-        meas = np.isfinite(np.asarray(y_next, float)[:len(I_Q)])
+        meas = np.isfinite(np.asarray(y_next, float)[:4])
         idx = np.array([i for i, ok in zip(I_Q, meas, strict=True) if ok and not sp.fixed[i]],
                        int)
         if idx.size == 0:
@@ -204,7 +204,7 @@ class OnlineCalibrator:
                                      np.full(5, np.nan))
         nodes = idx - N_PARAMS
         sens = (x_next[1:, nodes] - x_next[0, nodes]).T / delta      # ∂x_node/∂q [K m2/W]
-        e_all = np.zeros(len(I_Q))
+        e_all = np.zeros(4)
         e_all[nodes] = np.clip(y_next[nodes] - x_next[0, nodes], -cfg.spike_threshold_k,
                                cfg.spike_threshold_k)
         a = 1.0 - np.exp(-steps.step_s / cfg.innovation_smoothing_s) if (

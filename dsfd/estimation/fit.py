@@ -268,19 +268,14 @@ def fit_staged(problem: WindowProblem, space: ParameterSpace, *, prior_phi: np.n
                **options) -> FitResult:
     """Flow parameters from the cavity speed, the rest from the temperatures.
 
-    Stage 1 fits the free f, c, n to the |v| residuals alone (every other parameter held
-    at its current value); then each round, stage 2 fits the free heat-transfer
-    coefficients and offsets to the x1…x5 residuals alone, with f, c, n held, and stage 1
-    runs again given stage 2's estimate. Both stages keep the arrival cost of the prior
-    (``prior_phi``, ``prior_cov``). ``rounds`` > 1 alternates the stages towards their
-    common solution, where each block is the least-squares estimate from its own
-    measurements given the other (needed when the start is far off, e.g. an off-line fit
-    from the defaults). Ending on stage 1 makes f, c, n the speed's estimate given the
-    heat-transfer block they are used with: the cavity temperature that drives the stack
-    effect depends on it (the offset q_x5 above all). Ending on stage 2, one on-line round
-    from the defaults left f, c, n 20–27 % off on data with an unmodelled 40 W/m2 in the
-    cavity air. Each stage is a :func:`fit_window` with ``max_nfev`` evaluations and
-    ``options``.
+    Each round: stage 1 fits the free f, c, n to the |v| residuals alone (every other
+    parameter held at its current value); stage 2 fits the free heat-transfer
+    coefficients and offsets to the x1…x5 residuals alone, with f, c, n held at stage
+    1's estimate. Both stages keep the arrival cost of the prior (``prior_phi``,
+    ``prior_cov``). ``rounds`` > 1 alternates the stages towards their common solution,
+    where each block is the least-squares estimate from its own measurements given the
+    other (needed when the start is far off, e.g. an off-line fit from the defaults).
+    Each stage is a :func:`fit_window` with ``max_nfev`` evaluations and ``options``.
 
     Why: in one joint fit the airflow parameters also absorb the model-form error of the
     temperatures (the mid-height cavity-air sensor, the solar loads by day). On the truth
@@ -305,22 +300,18 @@ def fit_staged(problem: WindowProblem, space: ParameterSpace, *, prior_phi: np.n
     temperatures = problem.only(TEMPERATURES)
     prior_phi = np.asarray(prior_phi, float)
     start = prior_phi.copy()
-    first = _block(speed, space, start, prior_phi, prior_cov, free & flow, max_nfev, options)
-    start = space.to_phi(first.theta)
-    nfev, njev = first.nfev, first.njev
-    second = None
+    nfev = njev = 0
+    cov_flow = cov_rest = None
     for _ in range(max(rounds, 1)):
-        second = _block(temperatures, space, start, prior_phi, prior_cov, free & ~flow,
-                        max_nfev, options)
-        start = space.to_phi(second.theta)
-        # the speed stage again, given the heat transfer it will be used with: the
-        # temperatures' stage moved q_x5 and the h's, and with them the stack effect
         first = _block(speed, space, start, prior_phi, prior_cov, free & flow, max_nfev,
                        options)
         start = space.to_phi(first.theta)
+        second = _block(temperatures, space, start, prior_phi, prior_cov, free & ~flow,
+                        max_nfev, options)
+        start = space.to_phi(second.theta)
         nfev, njev = nfev + first.nfev + second.nfev, njev + first.njev + second.njev
-    assert second is not None
-    cov_flow, cov_rest = first.cov_phi, second.cov_phi
+        cov_flow, cov_rest = first.cov_phi, second.cov_phi
+    assert cov_flow is not None and cov_rest is not None
     cov = np.array(cov_rest)
     fi = np.flatnonzero(free & flow)
     cov[fi, :] = 0.0

@@ -109,7 +109,7 @@ class WindowProblem:
 
         Parameters
         ----------
-        theta_rows : array (R, 14) or (R, 9)
+        theta_rows : array (R, 13) or (R, 9)
             Fit vectors ϑ = (θ, q) (:mod:`dsfd.estimation.params`).
 
         Returns

@@ -117,7 +117,7 @@ def initial_state(model: LumpedModel, steps: StepData, row: int,
                   theta: np.ndarray) -> np.ndarray:
     """Estimate at ``row``: steady state of that step's inputs, measured values put in.
 
-    ``theta`` (B, 14) or (B, 9) gives B estimates (one per fit vector) [K], shape (B, 6).
+    ``theta`` (B, 13) or (B, 9) gives B estimates (one per fit vector) [K], shape (B, 6).
     """
     theta = full_vector(np.atleast_2d(theta))
     k = min(row, steps.n_steps - 1)
@@ -157,7 +157,7 @@ def observe(model: LumpedModel, steps: StepData, theta: np.ndarray, *,
     model : LumpedModel
         Built with the data's step (``dsfd.estimation.stepdata.model_config``).
     steps : StepData
-    theta : array (B, 14) or (B, n, 14)
+    theta : array (B, 13) or (B, n, 13)
         Fit vectors ϑ = (θ, q), constant or per step (9 columns: no offsets).
     y_k : array (n + 1, 5), optional, [K]
         Measurements to use (default ``steps.y_k``), e.g. with flagged samples set to NaN.

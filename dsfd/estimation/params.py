@@ -5,14 +5,12 @@ The fit vector is ϑ = (θ, q) with
 * θ = (h_out, h_ca1, h_ca2, h_ca3, h_ca4, h_in, f, c, n) (:data:`PARAMETER_NAMES`), the
   paper's parameters, fitted in the coordinates log θ except the exponent n (its range
   [0.5, 1] is narrow and not a scale); bounds from the panel configuration (f per E11);
-* q = (q_x1, …, q_x5) [W/m2] (:data:`OFFSET_NAMES`), a constant heat flux added to
-  the absorbed short-wave of nodes 1–4 and, as a fifth source, to the cavity air
-  (``StepInputs.sources``), fitted as is within ±``offset_bound_wm2``. They absorb what
-  the lumped model cannot represent and the window makes evident — the sky temperature
-  under overcast skies, hourly-averaged irradiance, sensor offsets, the share of the
-  louver's heat that reaches the air at the probe of a stratified cavity — the
-  input-disturbance model of offset-free estimation (Pannocchia & Rawlings 2003).
-  ``calibration.heat_offsets: false`` fixes them at 0.
+* q = (q_x1, q_x2, q_x3, q_x4) [W/m2] (:data:`OFFSET_NAMES`), a constant heat flux added to
+  the absorbed short-wave of nodes 1–4 (``StepInputs.sources``), fitted as is within
+  ±``offset_bound_wm2``. They absorb what the lumped model cannot represent and the
+  window makes evident — the sky temperature under overcast skies, hourly-averaged
+  irradiance, sensor offsets — the input-disturbance model of offset-free estimation
+  (Pannocchia & Rawlings 2003). ``calibration.heat_offsets: false`` fixes them at 0.
 
 Which components a fit may move:
 
@@ -34,7 +32,7 @@ from dsfd.config.calibration import Calibration
 from dsfd.config.panel import PARAMETER_NAMES, PanelConfig
 from dsfd.physics.coupling import StepInputs
 
-OFFSET_NAMES: tuple[str, ...] = ("q_x1", "q_x2", "q_x3", "q_x4", "q_x5")
+OFFSET_NAMES: tuple[str, ...] = ("q_x1", "q_x2", "q_x3", "q_x4")
 FIT_NAMES: tuple[str, ...] = (*PARAMETER_NAMES, *OFFSET_NAMES)
 N_PARAMS = len(PARAMETER_NAMES)
 N_FIT = len(FIT_NAMES)
@@ -46,7 +44,7 @@ POWER_LAW_REGIMES = frozenset({5, 6, 7, 8})
 
 
 def full_vector(theta: np.ndarray) -> np.ndarray:
-    """ϑ (..., 14) from θ (..., 9) (zero offsets) or ϑ itself."""
+    """ϑ (..., 13) from θ (..., 9) (zero offsets) or ϑ itself."""
     theta = np.asarray(theta, float)
     if theta.shape[-1] == N_FIT:
         return theta
@@ -55,19 +53,11 @@ def full_vector(theta: np.ndarray) -> np.ndarray:
 
 
 def with_offsets(inputs: StepInputs, q: np.ndarray) -> StepInputs:
-    """Inputs with heat-flux offsets ``q`` (..., 5) [W/m2] added to the sources.
-
-    The optical sources have four columns (nodes 1–4); an offset on the cavity air becomes
-    a fifth (``dsfd.physics.network.assemble``), added only when it is non-zero somewhere.
-    """
+    """Inputs with heat-flux offsets ``q`` (broadcastable to ``sources``) [W/m2] added."""
     q = np.asarray(q, float)
     if not np.any(q):
         return inputs
-    src = np.asarray(inputs.sources, float)
-    if np.any(q[..., 4:]) and src.shape[-1] < q.shape[-1]:
-        src = np.concatenate([src, np.zeros((*src.shape[:-1], q.shape[-1] - src.shape[-1]))],
-                             axis=-1)
-    return inputs._replace(sources=src + q[..., :src.shape[-1]])
+    return inputs._replace(sources=np.asarray(inputs.sources) + q)
 
 
 @dataclass(frozen=True, eq=False)
@@ -76,15 +66,15 @@ class ParameterSpace:
 
     Attributes
     ----------
-    default, lower, upper : ndarray (14,)
+    default, lower, upper : ndarray (13,)
         Panel defaults (the first prior; offsets 0) and bounds, in ϑ units.
-    is_log : ndarray (14,), bool
+    is_log : ndarray (13,), bool
         Fitted as log ϑ (the h's, f and c).
-    prior_sd : ndarray (14,)
+    prior_sd : ndarray (13,)
         Spread of the first prior in fitting coordinates.
-    drift_sd : ndarray (14,)
+    drift_sd : ndarray (13,)
         Random-walk growth of the prior spread per √hour, fitting coordinates.
-    fixed : ndarray (14,), bool
+    fixed : ndarray (13,), bool
         Never calibrated on this panel.
     """
 
@@ -155,8 +145,8 @@ class ParameterSpace:
 
     # ----------------------------------------------------------------- freedom
     def free_in_window(self, regimes: np.ndarray,
-                       measured: tuple[str, ...] = ("x1", "x2", "x3", "x4", "x5")) -> np.ndarray:
-        """Components a window may move [bool (14,)].
+                       measured: tuple[str, ...] = ("x1", "x2", "x3", "x4")) -> np.ndarray:
+        """Components a window may move [bool (13,)].
 
         ``regimes`` are the commanded regimes of the window, ``measured`` the states with
         residuals in it (offsets of unmeasured nodes are not identifiable).

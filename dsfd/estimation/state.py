@@ -18,9 +18,7 @@ import numpy as np
 from dsfd.estimation.params import FIT_NAMES, N_FIT, ParameterSpace
 
 SCHEMA = "dsfd.calibration-state"
-#: 2 added the heat-flux offset on the cavity air, q_x5; version-1 files are upgraded on
-#: reading (:func:`upgrade_v1`).
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 1
 
 
 class CalibrationStateError(ValueError):
@@ -34,14 +32,14 @@ class CalibrationState:
     Attributes
     ----------
     panel_id : str
-    theta : ndarray (14,)
+    theta : ndarray (13,)
         Current estimate ϑ̂ = (θ̂, q̂): h [W/(m2 K)], f [-], c [m3/(s Pa^n)], n [-] and the
         heat-flux offsets q_x1..q_x4 [W/m2] (:mod:`dsfd.estimation.params`).
-    cov_phi : ndarray (14, 14)
+    cov_phi : ndarray (13, 13)
         Covariance of ϑ̂ in the fitting coordinates (log θ; n and q linear).
-    prior_theta : ndarray (14,)
+    prior_theta : ndarray (13,)
         Mean of the first prior (the panel defaults when the state was created).
-    prior_sd_phi : ndarray (14,)
+    prior_sd_phi : ndarray (13,)
         Spread of the first prior in fitting coordinates.
     last_update_s : float or None, [s]
         UTC unix time of the newest data in the last successful update.
@@ -137,31 +135,6 @@ def _missing(key: str) -> float:
     raise CalibrationStateError(f"key {key!r}: missing")
 
 
-def upgrade_v1(doc: dict, space: ParameterSpace) -> dict:
-    """A version-1 mapping (no q_x5) as version 2, so a restart after the upgrade resumes.
-
-    q_x5 starts as a new state would: 0 W/m2 with the first prior's spread, uncorrelated
-    with the rest. A mapping that is not a well-formed version 1 is returned as it is
-    (with version 2), and the checks of :func:`state_from_dict` name what is wrong.
-    """
-    old = list(FIT_NAMES[:-1])
-    if doc.get("parameter_names") != old:
-        return {**doc, "schema_version": SCHEMA_VERSION}
-    new = FIT_NAMES[-1]
-    i = N_FIT - 1
-    out = {**doc, "schema_version": SCHEMA_VERSION, "parameter_names": list(FIT_NAMES)}
-    for key, value in (("theta", space.default[i]), ("prior_theta", space.default[i]),
-                       ("prior_sd_phi", space.prior_sd[i])):
-        if isinstance(doc.get(key), dict):
-            out[key] = {**doc[key], new: float(value)}
-    cov = doc.get("cov_phi")
-    if isinstance(cov, list) and len(cov) == N_FIT - 1 and all(
-            isinstance(row, list) and len(row) == N_FIT - 1 for row in cov):
-        out["cov_phi"] = ([[*row, 0.0] for row in cov]
-                          + [[0.0] * (N_FIT - 1) + [float(space.prior_sd[i] ** 2)]])
-    return out
-
-
 def state_from_dict(doc: Any, *, space: ParameterSpace, panel_id: str) -> CalibrationState:
     """Validate a mapping written by :meth:`CalibrationState.to_dict`.
 
@@ -178,8 +151,6 @@ def state_from_dict(doc: Any, *, space: ParameterSpace, panel_id: str) -> Calibr
     if doc.get("schema") != SCHEMA:
         raise CalibrationStateError(f"key 'schema': expected {SCHEMA!r}, got "
                                     f"{doc.get('schema')!r}")
-    if doc.get("schema_version") == 1:
-        doc = upgrade_v1(doc, space)
     if doc.get("schema_version") != SCHEMA_VERSION:
         raise CalibrationStateError(f"key 'schema_version': {doc.get('schema_version')!r} is "
                                     f"not supported (this dsfd reads {SCHEMA_VERSION})")
@@ -199,11 +170,9 @@ def state_from_dict(doc: Any, *, space: ParameterSpace, panel_id: str) -> Calibr
     try:
         cov = np.array(cov, dtype=float)
     except (TypeError, ValueError):
-        raise CalibrationStateError(
-            f"key 'cov_phi': expected a {N_FIT} x {N_FIT} list of numbers") from None
+        raise CalibrationStateError("key 'cov_phi': expected a 13 x 13 list of numbers") from None
     if cov.shape != (N_FIT, N_FIT) or not np.all(np.isfinite(cov)):
-        raise CalibrationStateError(
-            f"key 'cov_phi': expected a {N_FIT} x {N_FIT} list of finite numbers")
+        raise CalibrationStateError("key 'cov_phi': expected a 13 x 13 list of finite numbers")
     if not np.allclose(cov, cov.T, rtol=1e-6, atol=1e-12) or np.any(np.diag(cov) <= 0):
         raise CalibrationStateError("key 'cov_phi': not a covariance (asymmetric or "
                                     "non-positive diagonal)")

@@ -106,7 +106,7 @@ def replay_scores(cfg: PanelConfig, steps: StepData, *, offline_theta: np.ndarra
         The panel; its model step is replaced by the data's sampling interval.
     steps : StepData
         The record (:func:`dsfd.estimation.stepdata.step_data`).
-    offline_theta : array (14,) or (9,), optional
+    offline_theta : array (13,) or (9,), optional
         Frozen fit vector of the off-line model; omitted from the scores if None.
     horizons : tuple of int
         Lead times scored [steps].

@@ -46,9 +46,8 @@ class StepInputs(NamedTuple):
         Local wind speed at the façade.
     cp_bottom, cp_top : [-]
         Wind pressure coefficients of the bottom and top openings.
-    sources : (..., 4) or (..., 5), [W/m2]
-        Absorbed short-wave in L1, L2, L3 and the louver (node order, errata E3); a fifth
-        column, if any, is a heat input to the cavity air (calibrated offset q_x5).
+    sources : (..., 4), [W/m2]
+        Absorbed short-wave in L1, L2, L3 and the louver (node order, errata E3).
     lw_exchange : (..., 3), [-]
         Cavity long-wave exchange factors (R_14, R_12, R_42) of physics §6.2.
     q_trans_wm2 : [W/m2]

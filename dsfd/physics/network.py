@@ -73,9 +73,8 @@ def assemble(conductance: np.ndarray, bnd: Boundary,
     conductance : array (..., 9), [W/(m2 K)]
         Internal link conductances in the order of :data:`LINKS`.
     bnd : Boundary
-    sources : array (..., 4) or (..., 5), [W/m2]
-        Absorbed short-wave S1 (L1), S2 (L2), S3 (L3), S4 (louver) (errata E3); a fifth
-        column is a heat input to the cavity air (the calibrated offset q_x5).
+    sources : array (..., 4), [W/m2]
+        Absorbed short-wave S1 (L1), S2 (L2), S3 (L3), S4 (louver) (errata E3).
 
     Returns
     -------
@@ -90,7 +89,7 @@ def assemble(conductance: np.ndarray, bnd: Boundary,
     lap[..., _DIAG[X3]] -= d3
     lap[..., _DIAG[X5]] -= bnd.g_adv
     q = np.zeros((*lap.shape[:-1], N_STATES))
-    q[..., :sources.shape[-1]] = sources
+    q[..., :4] = sources
     q[..., X1] += bnd.h_out * bnd.t_out + bnd.h_rad_out * bnd.t_rad_out
     q[..., X3] += bnd.h_in * bnd.t_in + bnd.h_rad_in * bnd.t_mrt
     q[..., X5] += bnd.g_adv * bnd.t_inflow

@@ -105,13 +105,13 @@ def write_params(path: str | Path, state: CalibrationState, space: ParameterSpac
     }
     head = (f"# dsfd off-line calibration of panel {state.panel_id}: parameters frozen for "
             "'dsfd validate --params'\n# units: h_* W/(m2 K), f -, c m3/(s Pa^n), n -, "
-            "q_x* (heat-flux offsets on nodes x1..x5) W/m2\n")
+            "q_x* (heat-flux offsets on nodes x1..x4) W/m2\n")
     write_text_atomic(path, head + yaml.safe_dump(doc, sort_keys=False))
 
 
 def read_params(path: str | Path, *, space: ParameterSpace,
                 panel_id: str | None = None) -> np.ndarray:
-    """Fit vector ϑ (14,) from a parameters file, validated against the panel bounds.
+    """Fit vector ϑ (13,) from a parameters file, validated against the panel bounds.
 
     The nine parameters of ``dsfd.config.panel.PARAMETER_NAMES`` are required; the heat-flux offsets
     are optional (0).

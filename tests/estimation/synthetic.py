@@ -11,7 +11,6 @@ import dataclasses
 import numpy as np
 
 from dsfd.config.panel import PanelConfig
-from dsfd.estimation.params import with_offsets
 from dsfd.measured import MeasuredData
 from dsfd.physics.constants import T_ZERO
 from dsfd.physics.coupling import StepInputs
@@ -34,11 +33,9 @@ def lumped_record(cfg: PanelConfig, theta: np.ndarray, *, step_s: float = 120.0,
                   hours: float = 8.0, start_h: float = 8.0, noise_k: float = 0.1,
                   noise_v: float = 0.003, seed: int = 0,
                   regimes: tuple[int, ...] = (1, 3, 5, 6, 10),
-                  block_min: float = 30.0,
-                  offsets_wm2: np.ndarray | None = None) -> tuple[MeasuredData, np.ndarray]:
+                  block_min: float = 30.0) -> tuple[MeasuredData, np.ndarray]:
     """A record of the lumped model with ``theta`` on RMIS weather (day 2, from ``start_h``).
 
-    ``offsets_wm2`` (5,) are true heat inputs on x1..x5 the panel's model does not know of.
     Returns the table and the true states (n + 1, 6) [K].
     """
     rng = np.random.default_rng(seed)
@@ -60,8 +57,6 @@ def lumped_record(cfg: PanelConfig, theta: np.ndarray, *, step_s: float = 120.0,
     column = Forcing(*(np.asarray(v)[:, None] for v in forcing))
     inp = step_inputs(column, FacadeOptics(cfg).loads(column, np.radians(phi)))
     inp = StepInputs(*(np.asarray(v)[:, 0] for v in inp))
-    if offsets_wm2 is not None:
-        inp = with_offsets(inp, offsets_wm2)
     model = LumpedModel(cfg)
     x0 = model.steady_state([reg[0]], or_[0], inp.at((slice(0, 1),)), theta)
     traj = model.rollout(x0, reg[None], or_[None], inp, theta)

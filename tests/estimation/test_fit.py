@@ -8,10 +8,8 @@ import numpy as np
 import pytest
 
 from dsfd.config.panel import PARAMETER_NAMES
-from dsfd.estimation.calibration import make_problem, offline_fit
-from dsfd.estimation.fit import FLOW_PARAMETERS, fit_staged
-from dsfd.estimation.observer import observe
-from dsfd.estimation.params import FIT_NAMES, ParameterSpace
+from dsfd.estimation.calibration import offline_fit
+from dsfd.estimation.params import ParameterSpace
 from dsfd.estimation.stepdata import model_config, step_data
 from dsfd.measured import MeasuredData
 from dsfd.physics.model import LumpedModel
@@ -43,21 +41,6 @@ def test_identifiable_parameters_are_recovered_within_5_percent(suwon, record, c
     assert err.max() < 0.05, f"{worst}: {err.max():.1%}"
     # the heat-flux offsets stay near zero on data the model can represent
     assert np.all(np.abs(state.theta[9:]) < 3.0)
-
-
-def test_a_heat_input_to_the_cavity_air_is_found_as_the_offset_q_x5(suwon):
-    """Data of a cavity whose air gets 40 W/m2 the model does not know of (e.g. the share
-    of the louver's heat a stratified cavity carries past the probe): the fit attributes
-    it to q_x5, not to the conductances, which stay within 5 %."""
-    theta = true_theta(suwon)
-    q = np.array([0.0, 0.0, 0.0, 0.0, 40.0])
-    data, _ = lumped_record(suwon, theta, step_s=120.0, hours=8.0, seed=1, offsets_wm2=q)
-    steps = step_data(suwon, data)
-    state, fit = offline_fit(LumpedModel(model_config(suwon, steps.step_s)), steps)
-    assert fit.free[FIT_NAMES.index("q_x5")]
-    assert state.theta[FIT_NAMES.index("q_x5")] == pytest.approx(40.0, rel=0.15)
-    err = np.abs(state.theta[:6] / theta[:6] - 1.0)
-    assert err.max() < 0.05, f"{PARAMETER_NAMES[int(np.argmax(err))]}: {err.max():.1%}"
 
 
 def test_standard_errors_are_positive_and_small(suwon, clean_fit):
@@ -124,10 +107,8 @@ def test_the_outlier_matters_without_robust_loss_and_spike_filter(suwon, record,
 def test_flow_parameters_come_from_the_speed_not_from_a_biased_cavity_sensor(suwon, record):
     """A cavity-air sensor that reads 1.5 K high whenever a diagonal regime runs (a
     stratified cavity's mid-height air, which the well-mixed x5 does not represent): the
-    joint fit bends the flow coefficient c to absorb it (7 % off); the staged fit takes
-    f, c, n from the anemometer, which is right, and keeps them within 2.5 % (2 % before
-    the cavity-air offset q_x5: it takes part of the bias as heat, i.e. as buoyancy, which
-    the closing speed stage answers with f 2 % off)."""
+    joint fit bends the flow coefficient c to absorb it; the staged fit takes f, c, n from
+    the anemometer, which is right, and keeps them within 2 %."""
     data, theta = record
     cols = {k: v.copy() for k, v in data.columns.items()}
     cols["x5_c"] = cols["x5_c"] + np.where(np.isin(cols["afr"], [5, 6, 7, 8]), 1.5, 0.0)
@@ -139,32 +120,8 @@ def test_flow_parameters_come_from_the_speed_not_from_a_biased_cavity_sensor(suw
         cal = dataclasses.replace(suwon.calibration, flow_from_velocity=staged)
         state, _ = offline_fit(model, steps, cal)
         err[staged] = np.abs(state.theta[flow] / theta[flow] - 1.0)
-    assert np.all(err[True] < 0.025), err[True]
+    assert np.all(err[True] < 0.02), err[True]
     assert err[False].max() > 0.05, err[False]
-
-
-def test_one_staged_round_ends_with_flow_parameters_that_fit_the_final_heat_transfer(suwon):
-    """One on-line round from the defaults on data whose cavity air gets 40 W/m2 the model
-    does not know of: the temperatures' stage finds the heat (q_x5) and with it a warmer,
-    more buoyant cavity, so f, c, n must be refitted after it. Ending on the temperatures'
-    stage left them 20-27 % off the truth; ending on the speed's they are within 8 %."""
-    theta = true_theta(suwon)
-    data, _ = lumped_record(suwon, theta, step_s=120.0, hours=6.0, seed=1,
-                            offsets_wm2=np.array([0.0, 0.0, 0.0, 0.0, 40.0]))
-    steps = step_data(suwon, data)
-    model = LumpedModel(model_config(suwon, steps.step_s))
-    track = observe(model, steps, model.default_theta()[None])
-    s, space = suwon.calibration, ParameterSpace.from_panel(suwon)
-    problem = make_problem(model, steps, track.x_hat[0], track.x_pred[0], s)
-    mean, cov = space.first_prior()
-    fit = fit_staged(problem, space, prior_phi=mean, prior_cov=cov, rounds=1,
-                     free=space.free_in_window(problem.regimes, problem.measured),
-                     max_nfev=s.max_nfev, loss=s.loss, f_scale=s.f_scale,
-                     prior_weight=s.prior_weight, adaptive_scales=s.adaptive_scales)
-    assert fit.theta[FIT_NAMES.index("q_x5")] > 20.0
-    flow = list(FLOW_PARAMETERS)
-    err = np.abs(fit.theta[flow] / theta[flow] - 1.0)
-    assert err.max() < 0.08, err
 
 
 def test_a_window_that_frees_one_flow_parameter_alone_is_fitted(suwon):

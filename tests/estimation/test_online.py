@@ -52,7 +52,7 @@ def test_panels_fix_what_they_cannot_excite(suwon):
     off = dataclasses.replace(suwon.calibration, heat_offsets=False, fixed=("n",))
     space = ParameterSpace.from_panel(suwon, off)
     assert {k for k, f in zip(FIT_NAMES, space.fixed, strict=True) if f} == {
-        "n", "q_x1", "q_x2", "q_x3", "q_x4", "q_x5"}
+        "n", "q_x1", "q_x2", "q_x3", "q_x4"}
 
 
 def test_updates_are_due_after_the_minimum_window_and_interval(suwon):

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dsfd.estimation.params import FIT_NAMES, N_FIT, ParameterSpace
+from dsfd.estimation.params import FIT_NAMES, ParameterSpace
 from dsfd.estimation.state import CalibrationState
 from dsfd.storage.calibration_file import (
     CalibrationFileError,
@@ -29,10 +29,10 @@ def space(suwon):
 def state(space):
     rng = np.random.default_rng(0)
     theta = space.default * np.exp(0.1 * rng.standard_normal(space.default.size))
-    theta[9:] = [3.0, -1.5, 0.5, 0.0, -2.0]
-    a = 0.01 * rng.standard_normal((N_FIT, N_FIT))
+    theta[9:] = [3.0, -1.5, 0.5, 0.0]
+    a = 0.01 * rng.standard_normal((13, 13))
     return CalibrationState(panel_id="suwon-south", theta=space.clip(theta),
-                            cov_phi=a @ a.T + 1e-4 * np.eye(N_FIT), prior_theta=space.default,
+                            cov_phi=a @ a.T + 1e-4 * np.eye(13), prior_theta=space.default,
                             prior_sd_phi=space.prior_sd, last_update_s=1.6409e9, updates=42,
                             failed_updates=1, residuals_last=5208, cost_last=123.4,
                             free_last=("h_out", "f"))
@@ -48,33 +48,8 @@ def test_state_round_trips_through_the_file(tmp_path, space, state):
         state.last_update_s, 42, 1, ("h_out", "f"))
     assert [p.name for p in tmp_path.iterdir()] == ["calibration.json"]  # no temp left
     doc = json.loads(path.read_text())
-    assert doc["schema_version"] == 2 and list(doc["theta"]) == list(FIT_NAMES)
+    assert doc["schema_version"] == 1 and list(doc["theta"]) == list(FIT_NAMES)
     assert set(doc["std_error"]) == set(FIT_NAMES)
-
-
-def test_a_version_1_state_without_the_cavity_air_offset_resumes(tmp_path, space, state):
-    """A state saved before q_x5 existed (schema 1, 13 components) is upgraded on
-    reading: everything it had is kept, q_x5 starts as in a new state."""
-    path = tmp_path / "calibration.json"
-    save_state(path, state, space)
-    doc = json.loads(path.read_text())
-    doc["schema_version"] = 1
-    doc["parameter_names"] = doc["parameter_names"][:-1]
-    for key in ("theta", "prior_theta", "prior_sd_phi", "std_error"):
-        del doc[key]["q_x5"]
-    doc["cov_phi"] = [row[:-1] for row in doc["cov_phi"][:-1]]
-    path.write_text(json.dumps(doc))
-    back = load_state(path, space=space, panel_id="suwon-south")
-    assert np.array_equal(back.theta[:-1], state.theta[:-1]) and back.theta[-1] == 0.0
-    assert np.allclose(back.cov_phi[:-1, :-1], state.cov_phi[:-1, :-1])
-    assert np.all(back.cov_phi[-1, :-1] == 0.0)
-    assert back.cov_phi[-1, -1] == pytest.approx(space.prior_sd[-1] ** 2)
-    assert (back.updates, back.last_update_s) == (42, state.last_update_s)
-    # a version-1 file with a wrong shape is still refused by name
-    doc["cov_phi"] = doc["cov_phi"][:-1]
-    path.write_text(json.dumps(doc))
-    fresh, message = load_state_or_prior(path, space=space, panel_id="suwon-south")
-    assert fresh.updates == 0 and "cov_phi" in message
 
 
 def test_save_replaces_atomically(tmp_path, space, state):
