@@ -83,6 +83,7 @@ def print_tables(out: dict[str, float], models: list[tuple[str, str]],
                     if s == "mean" and states else out.get(f"measured.{s}_mean_c"))
             row = "".join(_cell(out.get(f"{m}.h{h}.{key}")) for m, _ in models)
             print(f"{s:<8}{row}{_cell(meas)}")
+    print_paired(out, [m for m, _ in models if m != "online"], horizons, states)
     regimes = sorted(int(k.rsplit("_", 1)[1]) for k in out
                      if k.startswith("measured.velocity_mean_cms.regime_"))
     if regimes:
@@ -95,6 +96,29 @@ def print_tables(out: dict[str, float], models: list[tuple[str, str]],
                   f"{int(out[f'measured.velocity_samples.regime_{r}']):9d}")
     else:
         print("\nTable 1 — no cavity speed (v_cav_ms) in the data: skipped")
+
+
+def print_paired(out: dict[str, float], others: list[str], horizons: tuple[int, ...],
+                 states: list[str]) -> None:
+    """Self-calibrating minus each other model: paired difference ± standard error [mK]."""
+    others = [m for m in others if any(k.startswith(f"online_vs_{m}.") for k in out)]
+    if not others:
+        return
+    print("\nSelf-calibrating minus other model, paired difference of the absolute errors "
+          "± standard error (batch means) [mK]; negative: self-calibrating better, "
+          "|diff| < 2 se: not distinguishable on this record")
+    print(f"{'state':<8}" + "".join(f"{f'{m[:9]} h{h}':>20}" for h in horizons for m in others))
+    for s in states:
+        cells = []
+        for h in horizons:
+            for m in others:
+                key = f"online_vs_{m}.h{h}.{s}_mae_diff"
+                if f"{key}_c" in out:
+                    diff, se = out[f"{key}_c"] * 1e3, out[f"{key}_se_c"] * 1e3
+                    cells.append(f"{diff:+10.1f} ± {se:6.1f}")
+                else:
+                    cells.append(f"{'-':>19}")
+        print(f"{s:<8}" + "".join(f"{c:>20}" for c in cells))
 
 
 def run(args: argparse.Namespace) -> int:

@@ -94,6 +94,39 @@ def _held(y: np.ndarray) -> np.ndarray:
     return np.where(idx >= 0, out, np.nan)
 
 
+def paired_difference(err_a: np.ndarray, err_b: np.ndarray, batch: int) -> tuple[float, float]:
+    """Mean of |e_a| − |e_b| and its standard error by batch means [K, K].
+
+    Parameters
+    ----------
+    err_a, err_b : array (S,), [K]
+        Absolute errors of two models on the same samples, in time order.
+    batch : int
+        Consecutive samples per batch; longer than the errors' correlation (a rollout's
+        errors at neighbouring starts share most of their path).
+
+    Returns
+    -------
+    diff, se : float
+        Negative ``diff``: model a is better. ``se`` is NaN with fewer than two batches.
+
+    Notes
+    -----
+    Batch means: the series is cut into k batches of ``batch`` samples (the remainder
+    dropped for the standard error); their means are treated as independent, so
+    se = sd(batch means)/√k (Law & Kelton, *Simulation Modeling and Analysis*, batch-means
+    method). A |diff| below about 2 se means the two models cannot be ranked on this record.
+    """
+    d = np.asarray(err_a, float) - np.asarray(err_b, float)
+    if d.size == 0:
+        return float("nan"), float("nan")
+    k = d.size // batch
+    if k < 2:
+        return float(np.mean(d)), float("nan")
+    means = d[:k * batch].reshape(k, batch).mean(axis=1)
+    return float(np.mean(d)), float(np.std(means, ddof=1) / np.sqrt(k))
+
+
 def replay_scores(cfg: PanelConfig, steps: StepData, *, offline_theta: np.ndarray | None = None,
                   horizons: tuple[int, ...] = (1, 15), warmup_h: float = 0.0,
                   online: bool = True, reference_v_ms: np.ndarray | None = None,
@@ -126,6 +159,8 @@ def replay_scores(cfg: PanelConfig, steps: StepData, *, offline_theta: np.ndarra
     dict
         ``<model>.h<N>.<state>_mae_c``, ``<model>.h<N>.mean_mae_c``,
         ``<model>.velocity_mae_cms.regime_<r>``, ``measured.velocity_mean_cms.regime_<r>``,
+        ``online_vs_<model>.h<N>.<state>_mae_diff_c`` and ``..._mae_diff_se_c`` (the paired
+        difference of the absolute errors and its standard error, :func:`paired_difference`),
         ``measured.<state>_mean_c``, ``online.theta.<name>``, counts and the step.
     """
     model = LumpedModel(model_config(cfg, steps.step_s))
@@ -151,12 +186,14 @@ def replay_scores(cfg: PanelConfig, steps: StepData, *, offline_theta: np.ndarra
     for i, m in enumerate(names):
         preds[m] = _rollouts(model, steps, starts, x_hat[i, starts], theta_k[i, starts], h_max)
     present = [j for j, s in enumerate(STATES) if s in steps.present]
+    batch = max(4 * h_max, round(3600.0 / steps.step_s))
     for h in horizons:
         target = y[starts + h]
         common = np.isfinite(target) & np.isfinite(held[starts])
+        errs: dict[str, np.ndarray] = {}
         for m in [*names, "persistence"]:
             pred = held[starts] if m == "persistence" else preds[m][0][:, h, :5]
-            err = np.abs(pred - target)
+            err = errs[m] = np.abs(pred - target)
             maes = []
             for j in present:
                 ok = common[:, j]
@@ -166,6 +203,14 @@ def replay_scores(cfg: PanelConfig, steps: StepData, *, offline_theta: np.ndarra
                     maes.append(mae)
             if maes:
                 out[f"{m}.h{h}.mean_mae_c"] = float(np.mean(maes))
+        if "online" in errs:
+            for m in [x for x in errs if x != "online"]:
+                for j in present:
+                    ok = common[:, j]
+                    diff, se = paired_difference(errs["online"][ok, j], errs[m][ok, j], batch)
+                    if np.isfinite(se):
+                        out[f"online_vs_{m}.h{h}.{STATES[j]}_mae_diff_c"] = diff
+                        out[f"online_vs_{m}.h{h}.{STATES[j]}_mae_diff_se_c"] = se
     for j in present:
         out[f"measured.{STATES[j]}_mean_c"] = float(np.nanmean(y[starts, j]) - T_ZERO)
     if "v" in steps.present:
