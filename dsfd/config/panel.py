@@ -280,6 +280,10 @@ class ModelOptions:
     transposition: Literal["haydavies", "isotropic"] = setting(
         "haydavies", doc="Sky-diffuse transposition onto the façade (physics §4.5)"
     )
+    louver_flow_loss: bool = setting(
+        True, doc="The slats' flow loss K_L(φ) (Borda–Carnot per slat row, physics §15.2) adds "
+        "to the form loss f of the orifice regimes, so the louver angle also changes the "
+        "airflow; false: the paper's model, where f alone stands for the cavity's losses")
     air_density_kgm3: float = setting(1.19, doc="Air density for heat capacities", unit="kg/m3",
                                       gt=0)
     air_heat_capacity_jkgk: float = setting(1006.0, doc="c_p of air", unit="J/(kg K)", gt=0)

@@ -54,6 +54,9 @@ class StepInputs(NamedTuple):
         Solar short-wave transmitted into the room per m² façade.
     q_da_w : [W]
         Daylighting benefit Q_DA of the step.
+    cavity_loss : [-]
+        Flow loss of the louver slats K_L(φ), added to the form loss f of the orifice
+        regimes (:func:`dsfd.physics.airflow.louver_flow_loss`).
     """
 
     t_out_k: np.ndarray
@@ -68,6 +71,7 @@ class StepInputs(NamedTuple):
     lw_exchange: np.ndarray
     q_trans_wm2: np.ndarray
     q_da_w: np.ndarray
+    cavity_loss: np.ndarray
 
     def broadcast(self, shape: tuple[int, ...]) -> StepInputs:
         """Every field broadcast to ``shape`` (plus its own trailing vector axis)."""

@@ -23,7 +23,7 @@ from typing import NamedTuple
 import numpy as np
 
 from dsfd.config.panel import PanelConfig
-from dsfd.physics.airflow import AirflowGeometry
+from dsfd.physics.airflow import AirflowGeometry, louver_flow_loss
 from dsfd.physics.constants import T_ZERO
 from dsfd.physics.coupling import StepInputs
 from dsfd.physics.longwave import (
@@ -215,12 +215,17 @@ class OpticalLoads(NamedTuple):
         Solar short-wave transmitted into the room.
     q_da_w : (..., n), [W]
         Daylighting benefit Q_DA (physics §12.4).
+    cavity_loss : (..., n), [-]
+        Flow loss K_L of the slats, referenced to the cavity velocity
+        (:func:`dsfd.physics.airflow.louver_flow_loss`; 0 without a louver or with
+        ``model.louver_flow_loss`` off).
     """
 
     sources: np.ndarray
     lw_exchange: np.ndarray
     q_trans_wm2: np.ndarray
     q_da_w: np.ndarray
+    cavity_loss: np.ndarray
 
 
 class FacadeOptics:
@@ -267,8 +272,16 @@ class FacadeOptics:
         d = self.cfg.daylight
         e_wp = d.luminous_efficacy_lmw * d.utilisation * self.area * vis.transmitted / self.floor
         q_da = d.lighting_power_wm2 * self.floor * np.minimum(1.0, e_wp / d.illuminance_setpoint_lx)
+        lv = self.cfg.louver
+        if lv is None or not self.cfg.model.louver_flow_loss:
+            k_l = np.zeros(shape)
+        else:
+            fac = self.cfg.facade
+            k_l = np.broadcast_to(louver_flow_loss(
+                phi_b, depth_m=fac.cavity_depth_m, slat_width_m=lv.slat_width_m,
+                slat_pitch_m=lv.slat_pitch_m, height_m=fac.glazed_height_m), shape)
         return OpticalLoads(sources, lw, np.broadcast_to(sol.transmitted, shape),
-                            np.broadcast_to(q_da, shape))
+                            np.broadcast_to(q_da, shape), k_l)
 
 
 def step_inputs(forcing: Forcing, loads: OpticalLoads) -> StepInputs:
@@ -286,6 +299,7 @@ def step_inputs(forcing: Forcing, loads: OpticalLoads) -> StepInputs:
         lw_exchange=loads.lw_exchange,
         q_trans_wm2=loads.q_trans_wm2,
         q_da_w=loads.q_da_w,
+        cavity_loss=loads.cavity_loss,
     )
 
 

@@ -154,7 +154,7 @@ class LumpedModel:
                               inp.cp_bottom, inp.cp_top)
         setup = flow_setup(regime.ravel(), or_.ravel(),
                            AirflowBoundary(*(np.ravel(v) for v in air)), self.geom,
-                           f=theta[..., 6].ravel(), c=theta[..., 7].ravel(),
+                           f=(theta[..., 6] + inp.cavity_loss).ravel(), c=theta[..., 7].ravel(),
                            n=theta[..., 8].ravel())
         return setup.reshape(shape)
 
@@ -179,7 +179,8 @@ class LumpedModel:
         or_ : array (B,) or scalar, [-]
             Damper opening ratio 0..1.
         inputs : StepInputs
-            Exogenous inputs (the louver angle enters through ``sources``/``lw_exchange``).
+            Exogenous inputs (the louver angle enters through ``sources``, ``lw_exchange``
+            and ``cavity_loss``).
         theta : array (9,) or (B, 9)
             Parameters (h_out, h_ca1..h_ca4, h_in [W/(m2 K)], f [-], c [m3/(s Pa^n)], n [-]).
 

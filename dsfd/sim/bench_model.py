@@ -56,7 +56,7 @@ def bench_model(panel: Path | None = None, *, repeats: int = 60) -> dict[str, fl
     batch_in = step_inputs(window, loads_all)
     batch_in = batch_in._replace(**{
         k: np.repeat(getattr(batch_in, k), len(regimes), axis=0)
-        for k in ("sources", "lw_exchange", "q_trans_wm2", "q_da_w")})
+        for k in ("sources", "lw_exchange", "q_trans_wm2", "q_da_w", "cavity_loss")})
     reg_b = np.tile(regimes, len(angles))[:, None].repeat(HORIZON, axis=1)
     t_step = _median_time(lambda: model.step(warm, [1], 1.0, step_in, theta), repeats * 5)
     t_h1 = _median_time(

@@ -48,7 +48,8 @@ class PlantOptions:
         "exponential", doc="E7.4, §8.1: 'orifice' 1/(C_d OR A_d)² (lumped) or the IBPSA "
         "exponential damper ζ(OR)/A_d²")
     louver_flow_resistance: bool = setting(
-        True, doc="E7.5, §15.2: louver-angle dependent cavity loss K_L(φ) (lumped: False)")
+        True, doc="E7.5, §15.2: louver-angle dependent cavity loss K_L(φ) of the orifice "
+        "paths (lumped: True, the lumped model's default model.louver_flow_loss)")
     diagonal_flow: Literal["power_law", "orifice"] = setting(
         "orifice", doc="E7.6: regimes 5–8 by c·OR·|ΔP|^n (lumped) or as orifices (E16)")
     convection: Literal["constant", "correlations"] = setting(
@@ -129,7 +130,7 @@ class PlantOptions:
         """Every E7 switch at the lumped model's setting (N = 1), others as given."""
         lumped = dict(
             n_segments=1, split_cavity=False, plenums=False, damper_model="orifice",
-            louver_flow_resistance=False, diagonal_flow="power_law", convection="constant",
+            louver_flow_resistance=True, diagonal_flow="power_law", convection="constant",
             dgu_gap="constant_h", radiation="three_layer", optics="lumped", solar_time="step",
             weather_hold="zoh", air_properties="constant", actuators="ideal",
             glass_vertical_conduction=False, sensors="ideal", sky_model="lumped",

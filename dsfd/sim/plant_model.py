@@ -25,6 +25,7 @@ import numpy as np
 from scipy.sparse import csc_matrix
 
 from dsfd.config.panel import PanelConfig
+from dsfd.physics.airflow import louver_flow_loss
 from dsfd.physics.constants import GRAVITY, R_AIR, SIGMA
 from dsfd.physics.forcing import TERRAIN_PROFILE
 from dsfd.sim.actuators import Actuators
@@ -55,7 +56,7 @@ from dsfd.sim.plant_layout import (
     column_weights,
     variable_air_capacity,
 )
-from dsfd.sim.plant_physics import iso15099_gap, lateral_open_fraction, louver_flow_loss
+from dsfd.sim.plant_physics import iso15099_gap, lateral_open_fraction
 
 N_ACC = 8
 #: Room-side accumulators (after the four of the energy balance), in order.

@@ -263,21 +263,6 @@ def damper_loss_scalar(y: float) -> float:
     return math.exp(DAMPER_A + DAMPER_B * (1.0 - y))
 
 
-def louver_flow_loss(phi_rad: ArrayLike, *, depth_m: float, slat_width_m: float,
-                     slat_pitch_m: float, height_m: float) -> FloatArray:
-    """Cavity loss K_L(φ) of the louver, referenced to the cavity velocity [-].
-
-    Notes
-    -----
-    Each slat row contracts the cavity to the free section D − w|cos φ|; Borda–Carnot loss
-    per row ζ_row = (D/(D − w|cos φ|) − 1)², K_L = (H_g/s) ζ_row (physics §15.2 [ENG]):
-    ≈ 3.4 at φ = 0 and 0 at ±90° for the Suwon panel.
-    """
-    free = depth_m - slat_width_m * np.abs(np.cos(np.asarray(phi_rad, float)))
-    zeta = (depth_m / np.maximum(free, 1e-3 * depth_m) - 1.0) ** 2
-    return height_m / slat_pitch_m * zeta
-
-
 def lateral_open_fraction(phi_rad: ArrayLike, *, slat_width_m: float,
                           slat_pitch_m: float) -> FloatArray:
     """Open fraction of the louver plane, max(0, 1 − (w/s)|sin φ|) [-] (errata E15)."""

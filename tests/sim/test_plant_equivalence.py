@@ -44,7 +44,7 @@ def test_lumped_equivalent_options_are_the_e7_settings():
         "orifice", "power_law", "constant")
     assert (opt.optics, opt.solar_time, opt.weather_hold) == ("lumped", "step", "zoh")
     assert (opt.actuators, opt.sensors, opt.sky_model) == ("ideal", "ideal", "lumped")
-    assert not opt.louver_flow_resistance and not opt.glass_vertical_conduction
+    assert opt.louver_flow_resistance and not opt.glass_vertical_conduction
     assert opt.advection == "upwind" and opt.air_properties == "constant"
     full = PlantOptions()
     assert full.n_segments == 10 and full.optics == "fine" and full.actuators == "realistic"

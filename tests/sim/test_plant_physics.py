@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from dsfd.physics.airflow import louver_flow_loss
 from dsfd.sim.plant_advection import limiter
 from dsfd.sim.plant_convection import ConvectionGeometry, coefficients
 from dsfd.sim.plant_flow import SQRT_COEF, reg_power, reg_power_slope
@@ -20,7 +21,6 @@ from dsfd.sim.plant_physics import (
     iso15099_gap,
     iso15099_room,
     lateral_open_fraction,
-    louver_flow_loss,
     mixed_convection,
     parallel_plates_developing,
 )

@@ -1,0 +1,93 @@
+"""The louver's flow loss K_L(φ) in the lumped model: where it acts and where it does not."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from dsfd.config import load_panel
+from dsfd.physics.airflow import louver_flow_loss
+from dsfd.physics.constants import T_ZERO
+from dsfd.physics.forcing import FacadeOptics, Forcing, step_inputs
+from dsfd.physics.model import LumpedModel
+from tests.conftest import PANELS
+
+ANGLES_DEG = np.array([0.0, 36.0, -72.0, 90.0])
+
+
+def _night(n_angles: int) -> Forcing:
+    """A still winter night (0 °C out, 22 °C room), one step per louver angle."""
+    one = np.ones(n_angles)
+    return Forcing(time_s=0 * one, t_out_k=T_ZERO * one, t_in_k=(22.0 + T_ZERO) * one,
+                   t_mrt_k=(22.0 + T_ZERO) * one, t_rad_out_k=T_ZERO * one,
+                   p_atm_pa=101325.0 * one, wind_ms=0 * one, cp_bottom=0.3 * one,
+                   cp_top=0.3 * one, zenith_deg=90.0 * one, azimuth_deg=180.0 * one,
+                   aoi_deg=90.0 * one, profile_deg=0 * one, beam_wm2=0 * one,
+                   diffuse_wm2=0 * one, ghi_wm2=0 * one, dni_wm2=0 * one, dhi_wm2=0 * one)
+
+
+def _with_loss(cfg, on: bool):
+    return dataclasses.replace(cfg, model=dataclasses.replace(cfg.model, louver_flow_loss=on))
+
+
+def _speeds(cfg, regime: int, theta: np.ndarray) -> np.ndarray:
+    """Cavity speed [m/s] of one step per angle of ANGLES_DEG from the same state."""
+    model = LumpedModel(cfg)
+    f = _night(len(ANGLES_DEG))
+    loads = FacadeOptics(cfg).loads(f, np.radians(ANGLES_DEG))
+    inp = step_inputs(f, loads)
+    # one step per angle: take the diagonal (angle i at step i)
+    i = np.arange(len(ANGLES_DEG))
+    inp = inp._replace(**{k: np.asarray(getattr(inp, k))[i, i] for k in inp._fields
+                          if np.ndim(getattr(inp, k)) >= 2})
+    x = np.array([[5.0, 12.0, 19.0, 10.0, 10.0, 15.5]]) + T_ZERO
+    x = np.repeat(x, len(ANGLES_DEG), axis=0)
+    return model.step(x, np.full(len(i), regime), 1.0, inp, theta).v_cav_ms
+
+
+@pytest.fixture(scope="module")
+def suwon_loss(suwon):
+    return _with_loss(suwon, True)
+
+
+def test_the_loss_is_the_form_loss_it_adds_to(suwon):
+    # K_L on top of f is the same path as a model without K_L whose f is f + K_L(φ)
+    lv, fac = suwon.louver, suwon.facade
+    theta = LumpedModel(suwon).default_theta()
+    on = _speeds(_with_loss(suwon, True), 1, theta)
+    k_l = louver_flow_loss(np.radians(ANGLES_DEG), depth_m=fac.cavity_depth_m,
+                           slat_width_m=lv.slat_width_m, slat_pitch_m=lv.slat_pitch_m,
+                           height_m=fac.glazed_height_m)
+    off_cfg = _with_loss(suwon, False)
+    for j, k in enumerate(k_l):
+        th = theta.copy()
+        th[6] += k
+        assert _speeds(off_cfg, 1, th)[j] == pytest.approx(on[j], rel=1e-9)
+    assert k_l[0] > 1.0 and k_l[-1] == pytest.approx(0.0, abs=1e-12)
+
+
+def test_horizontal_slats_slow_the_stack_flow_and_closed_ones_do_not(suwon_loss, suwon):
+    theta = LumpedModel(suwon).default_theta()
+    on = np.abs(_speeds(suwon_loss, 1, theta))
+    off = np.abs(_speeds(_with_loss(suwon, False), 1, theta))
+    assert on[0] < on[1] < on[3]           # |cos φ| 1 > 0.81 > 0: less free section, slower
+    assert on[3] == pytest.approx(off[3], rel=1e-9)
+    assert np.all(on[:3] < off[:3])
+
+
+@pytest.mark.parametrize("regime", [5, 6, 7, 8])
+def test_power_law_regimes_keep_their_calibrated_law(suwon, regime):
+    # c and n of regimes 5-8 describe the whole path; the slats' loss is inside c
+    theta = LumpedModel(suwon).default_theta()
+    on = _speeds(_with_loss(suwon, True), regime, theta)
+    off = _speeds(_with_loss(suwon, False), regime, theta)
+    np.testing.assert_allclose(on, off, rtol=1e-12)
+
+
+def test_a_panel_without_louver_has_no_slat_loss():
+    cfg = load_panel(PANELS / "suwon-south-no-louver.yaml")
+    f = _night(3)
+    loads = FacadeOptics(cfg).loads(f, np.radians([0.0, 45.0, 90.0]))
+    assert np.all(loads.cavity_loss == 0.0)
