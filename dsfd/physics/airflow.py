@@ -304,7 +304,7 @@ def louver_flow_loss(phi_rad: np.ndarray | float, *, depth_m: float, slat_width_
     Parameters
     ----------
     phi_rad : array, [rad]
-        Louver slat angle (0 = horizontal slats, ±π/2 = closed against the glass plane).
+        Louver slat angle (0 = horizontal slats, ±π/2 = slats vertical, in the glass plane).
     depth_m, slat_width_m, slat_pitch_m, height_m : float, [m]
         Cavity depth D, slat width w, vertical slat spacing s and glazed height H_g.
 
@@ -313,9 +313,10 @@ def louver_flow_loss(phi_rad: np.ndarray | float, *, depth_m: float, slat_width_
     Each slat row contracts the cavity to the free section D − w|cos φ| and the flow
     expands again behind it; the Borda–Carnot loss of that sudden expansion is
     ζ_row = (D/(D − w|cos φ|) − 1)² referenced to the cavity velocity, and the H_g/s rows
-    add up: K_L = (H_g/s) ζ_row (physics §15.2 [ENG, order of magnitude]; the expansion loss
-    of Idelchik, *Handbook of Hydraulic Resistance*, diagram 4-1). About 3.4 at φ = 0 and 0
-    at ±90° for the Suwon panel. It adds to the form loss f of the orifice regimes.
+    add up: K_L = (H_g/s) ζ_row (physics §15.2 [ENG, order of magnitude]; the sudden-expansion
+    loss of Idelchik, *Handbook of Hydraulic Resistance*, referred to the wide section). About
+    3.4 at φ = 0 and 0 at ±90° for the Suwon panel. It adds to the form loss f of the
+    orifice regimes.
     """
     free = depth_m - slat_width_m * np.abs(np.cos(np.asarray(phi_rad, float)))
     zeta = (depth_m / np.maximum(free, 1e-3 * depth_m) - 1.0) ** 2
