@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from dsfd.config import load_panel
-from dsfd.physics.forcing import FacadeOptics, facade_forcing, step_inputs
+from dsfd.physics.forcing import FacadeOptics, OpticalLoads, facade_forcing, step_inputs
 from dsfd.physics.model import LumpedModel
 from dsfd.sim.openloop import first_step
 from dsfd.sim.replay import at_site, load_weather, step_window, weather_inputs
@@ -56,7 +56,7 @@ def bench_model(panel: Path | None = None, *, repeats: int = 60) -> dict[str, fl
     batch_in = step_inputs(window, loads_all)
     batch_in = batch_in._replace(**{
         k: np.repeat(getattr(batch_in, k), len(regimes), axis=0)
-        for k in ("sources", "lw_exchange", "q_trans_wm2", "q_da_w", "cavity_loss")})
+        for k in OpticalLoads._fields})  # the fields that depend on the louver angle
     reg_b = np.tile(regimes, len(angles))[:, None].repeat(HORIZON, axis=1)
     t_step = _median_time(lambda: model.step(warm, [1], 1.0, step_in, theta), repeats * 5)
     t_h1 = _median_time(

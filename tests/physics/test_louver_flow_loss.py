@@ -10,7 +10,7 @@ import pytest
 from dsfd.config import load_panel
 from dsfd.physics.airflow import louver_flow_loss
 from dsfd.physics.constants import T_ZERO
-from dsfd.physics.forcing import FacadeOptics, Forcing, step_inputs
+from dsfd.physics.forcing import FacadeOptics, Forcing, OpticalLoads, step_inputs
 from dsfd.physics.model import LumpedModel
 from tests.conftest import PANELS
 
@@ -40,8 +40,7 @@ def _speeds(cfg, regime: int, theta: np.ndarray) -> np.ndarray:
     inp = step_inputs(f, loads)
     # one step per angle: take the diagonal (angle i at step i)
     i = np.arange(len(ANGLES_DEG))
-    inp = inp._replace(**{k: np.asarray(getattr(inp, k))[i, i] for k in inp._fields
-                          if np.ndim(getattr(inp, k)) >= 2})
+    inp = inp._replace(**{k: np.asarray(getattr(inp, k))[i, i] for k in OpticalLoads._fields})
     x = np.array([[5.0, 12.0, 19.0, 10.0, 10.0, 15.5]]) + T_ZERO
     x = np.repeat(x, len(ANGLES_DEG), axis=0)
     return model.step(x, np.full(len(i), regime), 1.0, inp, theta).v_cav_ms

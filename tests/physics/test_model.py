@@ -9,7 +9,7 @@ import pytest
 
 from dsfd.config import load_panel
 from dsfd.physics.constants import T_ZERO
-from dsfd.physics.forcing import FacadeOptics, Forcing, step_inputs
+from dsfd.physics.forcing import FacadeOptics, Forcing, OpticalLoads, step_inputs
 from dsfd.physics.model import LumpedModel
 from dsfd.sim.openloop import run_lumped, summarize
 from dsfd.sim.replay import load_weather
@@ -48,9 +48,7 @@ def test_no_sun_steady_state_lies_between_outdoor_and_room(model, optics, regime
     """
     f = _forcing(wind=3.0)
     inp = step_inputs(f, optics.loads(f, np.radians(np.array([0.0, 54.0, -90.0]))))
-    inp = inp._replace(**{k: getattr(inp, k)[:, 0] for k in ("sources", "lw_exchange")},
-                       q_trans_wm2=inp.q_trans_wm2[:, 0], q_da_w=inp.q_da_w[:, 0],
-                       cavity_loss=inp.cavity_loss[:, 0])
+    inp = inp._replace(**{k: getattr(inp, k)[:, 0] for k in OpticalLoads._fields})
     x = model.steady_state(np.full(3, regime), 1.0, inp, model.default_theta())
     assert np.all(x >= T_ZERO - 1e-6) and np.all(x <= T_ZERO + 22.0 + 1e-6)
     # Steady means steady: one more step changes nothing.
@@ -89,9 +87,7 @@ def test_winter_sun_magnitudes_of_physics_8_5(model, optics):
     f = _forcing(beam=600.0, diffuse=150.0, wind=1.0, sky_drop=12.0)
     angles = np.radians(np.array([-45.0, 0.0, 30.0, 60.0]))
     inp = step_inputs(f, optics.loads(f, angles))
-    inp = inp._replace(**{k: getattr(inp, k)[:, 0] for k in ("sources", "lw_exchange")},
-                       q_trans_wm2=inp.q_trans_wm2[:, 0], q_da_w=inp.q_da_w[:, 0],
-                       cavity_loss=inp.cavity_loss[:, 0])
+    inp = inp._replace(**{k: getattr(inp, k)[:, 0] for k in OpticalLoads._fields})
     th = model.default_theta().copy()
     th[6] = 85.0
     x1 = model.steady_state(np.ones(4, int), 1.0, inp, th)
@@ -146,14 +142,10 @@ def test_batched_step_equals_single_steps(model, optics):
     ors = rng.uniform(0.1, 1, n)
     x = rng.uniform(270, 320, (n, 6))
     th = model.default_theta()
-    flat = inp_all._replace(**{k: getattr(inp_all, k)[:, 0] for k in ("sources", "lw_exchange")},
-                            q_trans_wm2=inp_all.q_trans_wm2[:, 0], q_da_w=inp_all.q_da_w[:, 0],
-                            cavity_loss=inp_all.cavity_loss[:, 0])
+    flat = inp_all._replace(**{k: getattr(inp_all, k)[:, 0] for k in OpticalLoads._fields})
     batch = model.step(x, regimes, ors, flat, th)
     for i in range(n):
-        one = flat._replace(sources=flat.sources[i], lw_exchange=flat.lw_exchange[i],
-                            q_trans_wm2=flat.q_trans_wm2[i], q_da_w=flat.q_da_w[i],
-                            cavity_loss=flat.cavity_loss[i])
+        one = flat._replace(**{k: getattr(flat, k)[i] for k in OpticalLoads._fields})
         single = model.step(x[i:i + 1], [regimes[i]], [ors[i]], one, th)
         np.testing.assert_allclose(single.x_next[0], batch.x_next[i], atol=1e-5)
         np.testing.assert_allclose(single.flow.m_dot[0], batch.flow.m_dot[i], atol=1e-7)
