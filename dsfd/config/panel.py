@@ -284,6 +284,12 @@ class ModelOptions:
         True, doc="The slats' flow loss K_L(φ) (Borda–Carnot per slat row, physics §15.2) adds "
         "to the form loss f of the orifice regimes, so the louver angle also changes the "
         "airflow; false: the paper's model, where f alone stands for the cavity's losses")
+    cavity_air_profile: Literal["well_mixed", "exponential"] = setting(
+        "exponential", doc="What the cavity-air state x5 stands for: 'exponential' (ISO 15099 "
+        "§7.3: the mean of an air column warming exponentially from its inlet, which is what "
+        "a mid-height probe reads and what sets the stack; the air leaves at "
+        "T_in + k (x5 − T_in), 1 < k ≤ 2) or 'well_mixed' (the paper's model: the air leaves "
+        "at x5)")
     air_density_kgm3: float = setting(1.19, doc="Air density for heat capacities", unit="kg/m3",
                                       gt=0)
     air_heat_capacity_jkgk: float = setting(1006.0, doc="c_p of air", unit="J/(kg K)", gt=0)

@@ -20,6 +20,7 @@ from typing import NamedTuple
 import numpy as np
 
 from dsfd.physics.airflow import IB, IT, AirflowGeometry, FlowState
+from dsfd.physics.cavity_profile import outlet_excess_ratio
 from dsfd.physics.constants import SIGMA
 from dsfd.physics.network import X5, Boundary, assemble, boundary_heat_in
 from dsfd.physics.regimes import FlowSetup, PathFlow, inflow, opening_flows, path_flows
@@ -149,6 +150,7 @@ class NetworkConstants:
     max_evals: int
     zoh: str
     q_air_basis: str
+    cavity_profile: str  # "well_mixed" (paper) or "exponential" (ISO 15099 §7.3)
 
 
 _SECANT_A = np.array([1, 0, 0, 3, 0, 2])  # first node of each radiative pair
@@ -200,37 +202,71 @@ def frozen_network(nc: NetworkConstants, x: np.ndarray, inp: StepInputs,
     return lap, q, bnd
 
 
+class FlowTerms(NamedTuple):
+    """The airflow's part of one evaluation of the coupled network (arrays (B,))."""
+
+    flow: PathFlow
+    g_adv: np.ndarray  # advective conductance of the x5 balance, k c_p ṁ_in/A_f [W/(m2 K)]
+    t_inflow: np.ndarray  # mixed inflow temperature [K]
+    outlet_ratio: np.ndarray  # k: outlet excess over the inflow per unit of x5's [-]
+
+
+def outlet_ratio(nc: NetworkConstants, lap0: np.ndarray, g_flow: np.ndarray) -> np.ndarray:
+    """k of the cavity air profile (1 well mixed) for the flow conductance ``g_flow``.
+
+    The surfaces' conductance to the air is the x5 diagonal of the airflow-free network
+    (h_ca1 + a_L h_ca2 + h_ca3); a panel without louver has the placeholder link to the
+    louver node in it, which is not a surface.
+    """
+    if nc.cavity_profile == "well_mixed":
+        return np.ones_like(g_flow)
+    g_surf = -lap0[:, X5, X5] - (0.0 if nc.has_louver else NO_LOUVER_LINK)
+    moving = g_flow > 0
+    return outlet_excess_ratio(np.where(moving, g_surf / np.where(moving, g_flow, 1.0),
+                                        np.inf))
+
+
 def with_flow(nc: NetworkConstants, t5: np.ndarray, setup: FlowSetup, lap0: np.ndarray,
-              q0: np.ndarray) -> tuple[np.ndarray, np.ndarray, PathFlow, np.ndarray, np.ndarray]:
+              q0: np.ndarray) -> tuple[np.ndarray, np.ndarray, FlowTerms]:
     """L, q with the airflow evaluated at cavity temperature ``t5`` (arrays of one batch).
 
-    Returns L, q, the path flows, the advective conductance c_p ṁ_in/A_f [W/(m2 K)] and the
-    mixed inflow temperature [K].
+    The air brings c_p ṁ_in (T_inflow − x5)·k per m² façade into the x5 balance, with
+    k = :func:`outlet_ratio` (1 for the paper's well-mixed node; ISO 15099 profile: x5 is
+    the column's mean and the air leaves at T_inflow + k (x5 − T_inflow)).
     """
     pf = path_flows(setup, t5, nc.geom)
     m_in, t_inflow = inflow(setup, pf)
-    g_adv = nc.cp_air * m_in / nc.geom.facade_area_m2
+    g_flow = nc.cp_air * m_in / nc.geom.facade_area_m2
+    k = outlet_ratio(nc, lap0, g_flow)
+    g_adv = k * g_flow
     lap = lap0.copy()
     q = q0.copy()
     lap[:, X5, X5] -= g_adv
     q[:, X5] += g_adv * t_inflow
-    return lap, q, pf, g_adv, t_inflow
+    return lap, q, FlowTerms(pf, g_adv, t_inflow, k)
 
 
-def q_air(nc: NetworkConstants, m_dot: np.ndarray, x5_mean: np.ndarray,
+def exhaust_temperature(x5: np.ndarray, t_inflow: np.ndarray, k: np.ndarray) -> np.ndarray:
+    """Temperature of the air leaving the cavity [K]: T_inflow + k (x5 − T_inflow)."""
+    return t_inflow + k * (x5 - t_inflow)
+
+
+def q_air(nc: NetworkConstants, m_dot: np.ndarray, t_exhaust: np.ndarray,
           inp: StepInputs) -> np.ndarray:
     """Q_air of the step [W] (errata E2): a = ṁ cavity → room, b = ṁ room → cavity.
 
-    ventilation_credit: c_p [min(a,b)(T5 − T_i) + max(0, a − b)(T5 − T_o)]
-    make_up_loss:       c_p [a (T5 − T_i) + max(0, b − a)(T_o − T_i)]
+    ventilation_credit: c_p [min(a,b)(T_x − T_i) + max(0, a − b)(T_x − T_o)]
+    make_up_loss:       c_p [a (T_x − T_i) + max(0, b − a)(T_o − T_i)]
+
+    T_x is the air leaving the cavity (:func:`exhaust_temperature`; T5 when well mixed).
     """
     m_ib, m_it = m_dot[:, IB], m_dot[:, IT]
     b = np.maximum(m_ib, 0) + np.maximum(m_it, 0)
     a = np.maximum(-m_ib, 0) + np.maximum(-m_it, 0)
     if nc.q_air_basis == "ventilation_credit":
-        return nc.cp_air * (np.minimum(a, b) * (x5_mean - inp.t_in_k)
-                            + np.maximum(0.0, a - b) * (x5_mean - inp.t_out_k))
-    return nc.cp_air * (a * (x5_mean - inp.t_in_k)
+        return nc.cp_air * (np.minimum(a, b) * (t_exhaust - inp.t_in_k)
+                            + np.maximum(0.0, a - b) * (t_exhaust - inp.t_out_k))
+    return nc.cp_air * (a * (t_exhaust - inp.t_in_k)
                         + np.maximum(0.0, b - a) * (inp.t_out_k - inp.t_in_k))
 
 
@@ -247,6 +283,7 @@ def coupled_step(nc: NetworkConstants, x: np.ndarray, inp: StepInputs, theta: np
         return _ping_pong(nc, x, inp, lap0, q0, bnd0, setup)
     nb = x.shape[0]
     out_flow, out_rho, out_g, out_tin = np.zeros(nb), np.zeros(nb), np.zeros(nb), np.zeros(nb)
+    out_k = np.ones(nb)
     out_m9 = np.zeros((nb, 4)) if setup.any_all_open else None
     exact = nc.zoh == "eig"
     lam, vec, x_star = np.empty((nb, 6)), np.empty((nb, 6, 6)), np.empty((nb, 6))
@@ -255,9 +292,11 @@ def coupled_step(nc: NetworkConstants, x: np.ndarray, inp: StepInputs, theta: np
     def phi(t5: np.ndarray, rows: np.ndarray) -> np.ndarray:
         whole = rows.size == nb
         sub = setup if whole else setup.take(rows)
-        lap, q, pf, g, tin = with_flow(nc, t5, sub, lap0 if whole else lap0[rows],
-                                       q0 if whole else q0[rows])
-        out_flow[rows], out_rho[rows], out_g[rows], out_tin[rows] = pf.flow, pf.rho_c, g, tin
+        lap, q, ft = with_flow(nc, t5, sub, lap0 if whole else lap0[rows],
+                               q0 if whole else q0[rows])
+        pf = ft.flow
+        out_flow[rows], out_rho[rows], out_g[rows] = pf.flow, pf.rho_c, ft.g_adv
+        out_tin[rows], out_k[rows] = ft.t_inflow, ft.outlet_ratio
         if out_m9 is not None and sub.any_all_open:
             out_m9[rows[sub.rows_all_open]] = pf.m_all_open
             if not whole:  # keep the cavity pressure as the start of the next evaluation
@@ -285,7 +324,8 @@ def coupled_step(nc: NetworkConstants, x: np.ndarray, inp: StepInputs, theta: np
     m9 = out_m9[setup.rows_all_open] if out_m9 is not None else np.zeros((0, 4))
     flow = opening_flows(setup, PathFlow(out_flow, out_rho, m9))
     bnd = bnd0._replace(g_adv=out_g, t_inflow=out_tin)
-    return _result(nc, x_next, x_mean, flow, inp, bnd, fp.evaluations, fp.converged,
+    air = q_air(nc, flow.m_dot, exhaust_temperature(x_mean[:, X5], out_tin, out_k), inp)
+    return _result(nc, x_next, x_mean, flow, inp, bnd, fp.evaluations, fp.converged, air,
                    slope=fp.slope, t5_ahead=ahead)
 
 
@@ -300,24 +340,26 @@ def _ping_pong(nc: NetworkConstants, x, inp, lap0, q0, bnd0, setup) -> StepResul
                                             np.zeros(nb), np.zeros(nb))
     label = np.zeros(nb, dtype=int)
     for _ in range(n_sub):
-        lap, q, pf, g, tin = with_flow(nc, xs[:, X5], setup, lap0, q0)
-        fs = opening_flows(setup, pf)
+        lap, q, ft = with_flow(nc, xs[:, X5], setup, lap0, q0)
+        g, tin = ft.g_adv, ft.t_inflow
+        fs = opening_flows(setup, ft.flow)
         st = modal_step(modal(lap, q, nc.capacity), xs, dt)
         mean += st.x_mean / n_sub
         m_acc += fs.m_dot / n_sub
         q_acc += fs.q_cav / n_sub
         g_acc += g / n_sub
         gt_acc += g * tin / n_sub
-        air_acc += q_air(nc, fs.m_dot, st.x_mean[:, X5], inp) / n_sub
+        t_exhaust = exhaust_temperature(st.x_mean[:, X5], tin, ft.outlet_ratio)
+        air_acc += q_air(nc, fs.m_dot, t_exhaust, inp) / n_sub
         xs, label = st.x_next, fs.label
     tin = np.where(g_acc > 0, gt_acc / np.where(g_acc > 0, g_acc, 1.0), inp.t_in_k)
     bnd = bnd0._replace(g_adv=g_acc, t_inflow=tin)
     return _result(nc, xs, mean, FlowState(m_acc, label, q_acc), inp, bnd,
-                   np.full(nb, n_sub), np.ones(nb, bool), air=air_acc)
+                   np.full(nb, n_sub), np.ones(nb, bool), air_acc)
 
 
-def _result(nc: NetworkConstants, x_next, x_mean, flow, inp, bnd, evals, conv,
-            air=None, slope=None, t5_ahead=None) -> StepResult:
+def _result(nc: NetworkConstants, x_next, x_mean, flow, inp, bnd, evals, conv, air,
+            slope=None, t5_ahead=None) -> StepResult:
     a_f = nc.geom.facade_area_m2
     x3 = x_mean[:, 2]
     q_cv_rd = a_f * (bnd.h_in * (x3 - inp.t_in_k) + bnd.h_rad_in * (x3 - inp.t_mrt_k))
@@ -328,7 +370,7 @@ def _result(nc: NetworkConstants, x_next, x_mean, flow, inp, bnd, evals, conv,
         v_cav_ms=flow.q_cav / nc.geom.cavity_area_m2,
         q_cv_rd_w=q_cv_rd,
         q_sol_w=a_f * inp.q_trans_wm2,
-        q_air_w=q_air(nc, flow.m_dot, x_mean[:, X5], inp) if air is None else air,
+        q_air_w=air,
         q_da_w=inp.q_da_w,
         heat_in_wm2=boundary_heat_in(x_mean, bnd, inp.sources),
         evaluations=evals,

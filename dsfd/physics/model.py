@@ -111,6 +111,7 @@ def network_constants(cfg: PanelConfig) -> NetworkConstants:
         max_evals=mo.coupling_max_iterations,
         zoh=mo.zoh,
         q_air_basis=mo.q_air_basis,
+        cavity_profile=mo.cavity_air_profile,
     )
 
 

@@ -127,7 +127,12 @@ class PlantOptions:
 
     @classmethod
     def lumped_equivalent(cls, **overrides: object) -> PlantOptions:
-        """Every E7 switch at the lumped model's setting (N = 1), others as given."""
+        """Every E7 switch at the lumped model's setting (N = 1), others as given.
+
+        One air node is well mixed, so this plant is the lumped model with
+        ``model.cavity_air_profile: well_mixed``; with more segments the column stratifies
+        and the default exponential profile follows it more closely.
+        """
         lumped = dict(
             n_segments=1, split_cavity=False, plenums=False, damper_model="orifice",
             louver_flow_resistance=True, diagonal_flow="power_law", convection="constant",

@@ -97,11 +97,12 @@ def test_raw_start_kept_at_control_changes_gaps_and_edges(noisy):
 def test_smoothed_starts_remove_the_bias_of_h_in(suwon):
     """On lumped-model data (known θ, σ = 0.2 K, 1-minute samples) the fit from raw readings
     overestimates h_in — a noisy start is fitted best by a model that forgets it fast — and
-    the smoothed starts recover it within 5 % on average over the records."""
+    the smoothed starts recover it within 5 % on average over the records. Six records: one
+    record's h_in scatters by about ±4 %, as much as the bar, so three would test the noise."""
     theta = true_theta(suwon)
     model = LumpedModel(model_config(suwon, 60.0))
     bias = {0.0: [], 480.0: []}
-    for seed in (1, 2, 3):
+    for seed in range(1, 7):
         data, _ = lumped_record(suwon, theta, step_s=60.0, hours=4.0, seed=seed, noise_k=0.2)
         steps = step_data(suwon, data)
         for span in bias:
@@ -110,5 +111,5 @@ def test_smoothed_starts_remove_the_bias_of_h_in(suwon):
             bias[span].append(state.theta[H_IN] / theta[H_IN] - 1.0)
     smooth, raw = np.array(bias[480.0]), np.array(bias[0.0])
     assert np.mean(np.abs(smooth)) < 0.05, smooth
-    assert np.all(raw > smooth), (raw, smooth)
+    assert np.sum(raw > smooth) >= 5, (raw, smooth)  # a record may show no bias at all
     assert np.mean(raw) > 0.08 and np.mean(raw) > 2 * np.mean(np.abs(smooth)), (raw, smooth)

@@ -10,6 +10,8 @@ for every state, after 0.5 h.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -55,7 +57,9 @@ def test_plant_matches_lumped_model_over_a_day(suwon, rmis, clear_day, afr):
     start, n, inputs = clear_day
     plant = Plant(suwon, PlantOptions.lumped_equivalent(), seed=4, weather_series=rmis)
     theta = plant.params.lumped_theta(suwon)  # same θ: h's = m × defaults, f = f_true
-    model = LumpedModel(suwon)
+    # one air node at N = 1 is well mixed: the air leaves at its temperature
+    model = LumpedModel(dataclasses.replace(
+        suwon, model=dataclasses.replace(suwon.model, cavity_air_profile="well_mixed")))
     x0 = model.steady_state([afr], 1.0, first_step(inputs), theta)
     lumped = model.rollout(x0, np.full((1, n), afr), np.ones((1, n)), inputs, theta)
     plant.reset(start, command=Command(PHI_DEG, afr, 100.0), x0=x0[0])
@@ -86,3 +90,36 @@ def test_plant_matches_lumped_model_over_a_day(suwon, rmis, clear_day, afr):
         expected = float(lumped_w[0].sum() * dt)
         scale = float(np.abs(lumped_w[0]).sum() * dt)
         assert abs(room[key] - expected) <= 0.01 * scale + 1.0, (key, room[key], expected)
+
+
+@pytest.mark.parametrize("afr", [1, 3])
+def test_exponential_profile_follows_the_stratified_column(suwon, rmis, clear_day, afr):
+    # The same plant with N = 20 segments: the cavity air now warms up along the height and
+    # leaves at the top hotter than its mid-height value. Read as the column mean of an
+    # exponential profile (ISO 15099 §7.3), the lumped x5 follows that plant at least twice
+    # as closely as the paper's well-mixed node on every state, and (regime 1, room air in
+    # and out) so does the heat the air brings into the room.
+    start, n, inputs = clear_day
+    plant = Plant(suwon, PlantOptions.lumped_equivalent(n_segments=20, advection="upwind2"),
+                  seed=4, weather_series=rmis)
+    theta = plant.params.lumped_theta(suwon)
+    runs = {}
+    for profile in ("well_mixed", "exponential"):
+        cfg = dataclasses.replace(
+            suwon, model=dataclasses.replace(suwon.model, cavity_air_profile=profile))
+        model = LumpedModel(cfg)
+        x0 = model.steady_state([afr], 1.0, first_step(inputs), theta)
+        runs[profile] = model.rollout(x0, np.full((1, n), afr), np.ones((1, n)), inputs, theta)
+    plant.reset(start, command=Command(PHI_DEG, afr, 100.0), x0=runs["well_mixed"].x[0, 0])
+    x = np.empty((n, 6))
+    for k in range(n):
+        plant.advance(suwon.model.step_s)
+        x[k] = plant.true_state().x_mid_k
+    settle = 2 * SETTLE_STEPS
+    rms = {p: np.sqrt(((x - r.x[0, 1:])[settle:] ** 2).mean(axis=0)) for p, r in runs.items()}
+    assert np.all(rms["exponential"] < 0.5 * rms["well_mixed"]), rms
+    if afr == 1:
+        q_plant = plant.room_heat_j()["q_air"]
+        err = {p: abs(float(r.q_air_w[0].sum()) * suwon.model.step_s - q_plant)
+               for p, r in runs.items()}
+        assert err["exponential"] < 0.5 * err["well_mixed"], (err, q_plant)

@@ -1,0 +1,57 @@
+"""Vertical temperature profile of the ventilated cavity air (ISO 15099 §7.3).
+
+The lumped model has one cavity-air node x5. Read as a *well-mixed* node (the paper's model,
+physics §9.1) the air leaves the cavity at x5. Read as the *height-mean* of an air column
+that warms (or cools) exponentially from its inlet towards the surfaces' temperature
+(ISO 15099 §7.3, the ventilated-gap model), the air leaves hotter than its mean: the outlet's
+excess over the inlet is k(a) > 1 times the mean's. This module gives that factor, so the
+node x5 can stand for the mean column temperature, which is what a mid-height probe reads
+and what sets the stack pressure.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: Below this number of transfer units the closed form loses digits to cancellation; the
+#: series 2 − a/3 + a²/18 − a³/270 is exact there to a⁴/3240 (3e-12 at the switch).
+_SERIES_BELOW = 1e-2
+
+
+def outlet_excess_ratio(ntu: np.ndarray | float) -> np.ndarray:
+    """k(a) = (T_outlet − T_inlet)/(T_mean − T_inlet) of an exponential profile [-].
+
+    Parameters
+    ----------
+    ntu : array, [-]
+        Number of transfer units of the cavity air, a = H/H0 = Σ h_j A_j/(ṁ c_p): the
+        conductance of the surfaces to the air over the advective conductance of the flow
+        through it. ``inf`` (no flow) is allowed.
+
+    Returns
+    -------
+    ndarray, [-]
+        Between 1 (a → ∞: the air takes the surfaces' temperature at once, well mixed)
+        and 2 (a → 0: linear profile, the outlet excess twice the mean's).
+
+    Notes
+    -----
+    With the surfaces at a common (h-weighted) temperature T_av, the steady air column
+    follows T(z) = T_av − (T_av − T_in) e^(−z/H0) with H0 = ṁ c_p/(W Σh) (ISO 15099:2003
+    §7.3, the characteristic height of the ventilated gap). Over the height H, with a = H/H0:
+
+        outlet excess  (T_out − T_in)/(T_av − T_in)  = 1 − e^(−a)
+        mean excess    (T̄ − T_in)/(T_av − T_in)     = 1 − (1 − e^(−a))/a
+
+    and k(a) is their ratio. The heat the flow carries away, ṁ c_p (T_out − T_in), is then
+    k ṁ c_p (T̄ − T_in): the lumped node keeps its balance with the advective conductance
+    scaled by k, and that balance still equals the surfaces' heat Σh A (T_j − T̄) at steady
+    state.
+    """
+    a = np.asarray(ntu, float)
+    closed = np.where(a >= _SERIES_BELOW, a, 1.0)
+    outlet = -np.expm1(-closed)
+    exact = outlet / (1.0 - outlet / closed)
+    small = np.minimum(a, _SERIES_BELOW)
+    series = 2.0 + small * (-1.0 / 3.0 + small * (1.0 / 18.0 - small / 270.0))
+    return np.where(a >= _SERIES_BELOW, exact, series)
