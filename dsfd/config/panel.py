@@ -286,8 +286,8 @@ class ModelOptions:
         "airflow; false: the paper's model, where f alone stands for the cavity's losses")
     cavity_air_profile: Literal["well_mixed", "exponential"] = setting(
         "exponential", doc="What the cavity-air state x5 stands for: 'exponential' (ISO 15099 "
-        "§7.3: the mean of an air column warming exponentially from its inlet, which is what "
-        "a mid-height probe reads and what sets the stack; the air leaves at "
+        "ventilated gap: the mean of an air column warming exponentially from its inlet, "
+        "which is what a mid-height probe reads and what sets the stack; the air leaves at "
         "T_in + k (x5 − T_in), 1 < k ≤ 2) or 'well_mixed' (the paper's model: the air leaves "
         "at x5)")
     air_density_kgm3: float = setting(1.19, doc="Air density for heat capacities", unit="kg/m3",

@@ -1,9 +1,9 @@
-"""Vertical temperature profile of the ventilated cavity air (ISO 15099 §7.3).
+"""Vertical temperature profile of the ventilated cavity air (ISO 15099 ventilated gap).
 
 The lumped model has one cavity-air node x5. Read as a *well-mixed* node (the paper's model,
 physics §9.1) the air leaves the cavity at x5. Read as the *height-mean* of an air column
 that warms (or cools) exponentially from its inlet towards the surfaces' temperature
-(ISO 15099 §7.3, the ventilated-gap model), the air leaves hotter than its mean: the outlet's
+(ISO 15099's ventilated-gap model), the air leaves hotter than its mean: the outlet's
 excess over the inlet is k(a) > 1 times the mean's. This module gives that factor, so the
 node x5 can stand for the mean column temperature, which is what a mid-height probe reads
 and what sets the stack pressure.
@@ -37,8 +37,8 @@ def outlet_excess_ratio(ntu: np.ndarray | float) -> np.ndarray:
     Notes
     -----
     With the surfaces at a common (h-weighted) temperature T_av, the steady air column
-    follows T(z) = T_av − (T_av − T_in) e^(−z/H0) with H0 = ṁ c_p/(W Σh) (ISO 15099:2003
-    §7.3, the characteristic height of the ventilated gap). Over the height H, with a = H/H0:
+    follows T(z) = T_av − (T_av − T_in) e^(−z/H0) with H0 = ṁ c_p/(W Σh) (ISO 15099:2003,
+    the characteristic height of a ventilated gap). Over the height H, with a = H/H0:
 
         outlet excess  (T_out − T_in)/(T_av − T_in)  = 1 − e^(−a)
         mean excess    (T̄ − T_in)/(T_av − T_in)     = 1 − (1 − e^(−a))/a

@@ -150,7 +150,7 @@ class NetworkConstants:
     max_evals: int
     zoh: str
     q_air_basis: str
-    cavity_profile: str  # "well_mixed" (paper) or "exponential" (ISO 15099 §7.3)
+    cavity_profile: str  # "well_mixed" (paper) or "exponential" (ISO 15099 ventilated gap)
 
 
 _SECANT_A = np.array([1, 0, 0, 3, 0, 2])  # first node of each radiative pair

@@ -1,4 +1,4 @@
-"""The exponential cavity-air profile (ISO 15099 §7.3) of the lumped x5 balance.
+"""The exponential cavity-air profile (ISO 15099 ventilated gap) of the lumped x5 balance.
 
 References independent of the closed form: the profile ODE integrated numerically, the
 limits of a well-mixed node and of a linear profile, and the energy balance of the network.

@@ -96,9 +96,9 @@ def test_plant_matches_lumped_model_over_a_day(suwon, rmis, clear_day, afr):
 def test_exponential_profile_follows_the_stratified_column(suwon, rmis, clear_day, afr):
     # The same plant with N = 20 segments: the cavity air now warms up along the height and
     # leaves at the top hotter than its mid-height value. Read as the column mean of an
-    # exponential profile (ISO 15099 §7.3), the lumped x5 follows that plant at least twice
-    # as closely as the paper's well-mixed node on every state, and (regime 1, room air in
-    # and out) so does the heat the air brings into the room.
+    # exponential profile (ISO 15099's ventilated gap), the lumped x5 follows that plant at
+    # least twice as closely as the paper's well-mixed node on every state, and (regime 1,
+    # room air in and out) so does the heat the air brings into the room.
     start, n, inputs = clear_day
     plant = Plant(suwon, PlantOptions.lumped_equivalent(n_segments=20, advection="upwind2"),
                   seed=4, weather_series=rmis)
