@@ -36,7 +36,7 @@ from dsfd.sim.actuators import (
 )
 from dsfd.sim.plant_config import PlantOptions, TrueParameters, drift_factors
 from dsfd.sim.plant_flow import NETWORK, PAIR, FlowPiece, reg_coefficients
-from dsfd.sim.plant_forcing import ForcingTables, weather_at
+from dsfd.sim.plant_forcing import ForcingTables, station_ghi, weather_at
 from dsfd.sim.plant_init import initial_state
 from dsfd.sim.plant_model import N_ACC, ROOM_FLOWS, Piece, PlantModel
 from dsfd.sim.replay import at_site, weather_inputs
@@ -288,11 +288,14 @@ class Plant:
         return true_state(self, self._evaluate())
 
     def station_weather(self) -> dict[str, float]:
-        """True station values: means over the interval that ends now (logger convention)."""
+        """True station values: means over the interval that ends now (logger convention).
+
+        GHI is that of the plant's sky (:func:`~dsfd.sim.plant_forcing.station_ghi`).
+        """
         t = self.time_s - 0.5 * min(self._last_len, float(self.cfg.model.step_s))
         w = weather_at(self.series, self.cfg, np.array([t]), self.room_c(np.array([t])))
         return {"t_out_c": float(w.t_out_k[0] - T_ZERO),
-                "ghi_wm2": float(np.clip(np.nan_to_num(w.ghi_wm2[0]), 0.0, None)),
+                "ghi_wm2": float(station_ghi(self.cfg, w)[0]),
                 "wind_speed_ms": float(w.wind_speed_ms[0]),
                 "wind_dir_deg": float(w.wind_dir_deg[0])}
 

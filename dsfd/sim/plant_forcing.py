@@ -129,6 +129,37 @@ def weather_at(series: WeatherSeries, cfg: PanelConfig, times_s: np.ndarray,
     )
 
 
+def station_ghi(cfg: PanelConfig, w: WeatherInputs) -> np.ndarray:
+    """Global horizontal irradiance of the plant's own sky [W/m2], what its pyranometer sees.
+
+    Parameters
+    ----------
+    cfg : PanelConfig
+        The panel (its site gives the sun).
+    w : WeatherInputs
+        Weather at the plant (:func:`weather_at`).
+
+    Returns
+    -------
+    ghi : ndarray, [W/m2]
+        DNI max(cos Z, 0) + DHI where the record has both; the record's GHI elsewhere.
+
+    Notes
+    -----
+    The plant heats the façade with the measured beam and diffuse (both optics switches),
+    so a pyranometer on its site must read their closure, not the record's separate GHI
+    channel. On the bundled RMIS January record the GHI channel falls short of the closure
+    on the afternoons (mean over the local-solar hour: −25 W/m2 at 14 h, −28 W/m2 at 15 h,
+    about −9 % and −20 %; within 1.5 % from 9 to 12 h), so a station fed that channel would
+    tell the controller of a weaker sun than the one heating the plant.
+    """
+    dni, dhi = np.asarray(w.dni_wm2, float), np.asarray(w.dhi_wm2, float)
+    sun = solar_position(w.time_s, cfg.site.latitude_deg, cfg.site.longitude_deg)
+    closure = dni * np.maximum(np.cos(np.radians(sun.zenith_deg)), 0.0) + dhi
+    ghi = np.where(np.isfinite(closure), closure, np.asarray(w.ghi_wm2, float))
+    return np.clip(np.nan_to_num(ghi), 0.0, None)
+
+
 def fine_louver(cfg: PanelConfig, options: PlantOptions, d_rho: float = 0.0,
                 band: str = "solar") -> LouverOptics | None:
     """The louver with M = ``options.optics_segments`` and the slat thickness correction."""

@@ -144,3 +144,29 @@ def test_replays_typical_year_files(suwon, name):
     r = plant.read_sensors()
     assert all(np.isfinite(v) for v in r.values())
     assert r["ghi_wm2"] > 0.0
+
+
+def test_the_station_pyranometer_reads_the_sky_that_heats_the_plant(suwon, rmis):
+    """The station's GHI is the closure DNI cos Z + DHI of the measured beam and diffuse the
+    plant's optics use — not the record's own GHI channel, which on the clear afternoon of
+    2 January falls more than 10 % short of that closure (a controller fed it would see a
+    weaker sun than the one heating the façade)."""
+    from dsfd.physics.solar import solar_position
+
+    plant = Plant(suwon, PlantOptions(n_segments=3), seed=2, weather_series=rmis)
+    plant.reset(day_start(rmis, 1) + 14.5 * HOUR, command=Command(0.0, 1, 100.0))
+    plant.advance(60.0)
+    got = plant.station_weather()["ghi_wm2"]
+    t = plant.time_s - 30.0  # the logger's interval mean sits mid-interval
+    s = plant.series
+    dni, dhi, channel = (float(np.interp(t, s.time_s, getattr(s, c)))
+                         for c in ("dni_wm2", "dhi_wm2", "ghi_wm2"))
+    zenith = float(solar_position(np.array([t]), suwon.site.latitude_deg,
+                                  suwon.site.longitude_deg).zenith_deg[0])
+    assert 60.0 < zenith < 80.0 and dni > 500.0  # a clear winter afternoon
+    assert got == pytest.approx(dni * np.cos(np.radians(zenith)) + dhi, rel=1e-9)
+    assert got > 1.1 * channel
+    plant.reset(day_start(rmis, 1) + 2 * HOUR, command=Command(0.0, 1, 100.0))
+    plant.advance(60.0)
+    night = plant.station_weather()["ghi_wm2"]
+    assert 0.0 <= night < 2.0  # the diffuse channel's night offset, never negative or NaN
