@@ -178,9 +178,9 @@ class OnlineCalibrator:
         Notes
         -----
         With e = y_{k+1} − x̂_{k+1|k} on the measured nodes, ē its low-pass (time constant
-        τ_e = ``innovation_smoothing_s``: white sensor noise averages out, a persistent model
-        error passes) and S = ∂x_{k+1}/∂q (finite differences, all rows in one batched
-        model step),
+        τ_e = ``innovation_smoothing_s`` of each node: white sensor noise averages out, a
+        persistent model error passes) and S = ∂x_{k+1}/∂q (finite differences, all rows in
+        one batched model step),
 
             ē ← ē + a (clip(e, ±spike_threshold) − ē),   a = 1 − exp(−T/τ_e)
             q ← q + L S⁺ ē,                               L = 1 − exp(−T/τ_q)
@@ -207,8 +207,8 @@ class OnlineCalibrator:
         e_all = np.zeros(4)
         e_all[nodes] = np.clip(y_next[nodes] - x_next[0, nodes], -cfg.spike_threshold_k,
                                cfg.spike_threshold_k)
-        a = 1.0 - np.exp(-steps.step_s / cfg.innovation_smoothing_s) if (
-            cfg.innovation_smoothing_s > 0) else 1.0
+        tau = np.asarray(cfg.innovation_smoothing_s, float)
+        a = np.where(tau > 0, -np.expm1(-steps.step_s / np.where(tau > 0, tau, 1.0)), 1.0)
         self._innovation = np.where(meas, self._innovation + a * (e_all - self._innovation),
                                     self._innovation)
         dq = np.linalg.lstsq(sens, self._innovation[nodes], rcond=1e-6)[0]

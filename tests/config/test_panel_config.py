@@ -95,6 +95,18 @@ def test_observer_gains_need_one_per_measured_state_within_0_1():
     assert cfg.calibration.measurement_gain == (1.0, 0.3, 0.3, 1.0, 1.0)
 
 
+
+def test_innovation_smoothing_needs_one_time_constant_per_offset_node():
+    d = _suwon_dict()
+    d["calibration"] = {"innovation_smoothing_s": [300, 1800]}
+    issues = _issues(d)
+    assert "one time constant per offset node" in issues["calibration.innovation_smoothing_s"]
+    d["calibration"] = {"innovation_smoothing_s": [300, 1800, -5, 300]}
+    assert "-5" in _issues(d)["calibration.innovation_smoothing_s[2]"]
+    d["calibration"] = {"innovation_smoothing_s": [0, 3600, 3600, 0]}
+    cfg = panel_from_mapping(d, source="test.yaml")
+    assert cfg.calibration.innovation_smoothing_s == (0.0, 3600.0, 3600.0, 0.0)
+
 def test_booleans_are_not_numbers_and_ints_are_not_strings():
     d = _suwon_dict()
     d["model"]["step_s"] = True
