@@ -41,6 +41,7 @@ from dsfd.physics.longwave import (
 )
 from dsfd.physics.optics import NO_LOUVER, LouverOptics, glass_triples, layer_absorption
 from dsfd.physics.solar import (
+    beam_on_surface,
     dirint,
     extraterrestrial_irradiance,
     facade_irradiance,
@@ -153,9 +154,9 @@ def station_ghi(cfg: PanelConfig, w: WeatherInputs) -> np.ndarray:
     about −9 % and −20 %; within 1.5 % from 9 to 12 h), so a station fed that channel would
     tell the controller of a weaker sun than the one heating the plant.
     """
-    dni, dhi = np.asarray(w.dni_wm2, float), np.asarray(w.dhi_wm2, float)
     sun = solar_position(w.time_s, cfg.site.latitude_deg, cfg.site.longitude_deg)
-    closure = dni * np.maximum(np.cos(np.radians(sun.zenith_deg)), 0.0) + dhi
+    # a horizontal plane's angle of incidence is the zenith angle
+    closure = beam_on_surface(w.dni_wm2, sun.zenith_deg) + np.asarray(w.dhi_wm2, float)
     ghi = np.where(np.isfinite(closure), closure, np.asarray(w.ghi_wm2, float))
     return np.clip(np.nan_to_num(ghi), 0.0, None)
 
