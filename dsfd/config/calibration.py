@@ -26,7 +26,7 @@ YAML shape (every key optional; the defaults suit a 1-minute controller cycle)::
       offset_tracking_s: 600      # offsets follow each measurement between fits (τ)
       innovation_smoothing_s: [300, 1800, 1800, 300]  # ... through a low-pass per node x1..x4
       broyden_updates: 1          # Broyden Jacobian updates between finite differences
-      measurement_gain: [1, 1, 1, 1, 1]  # state update: weight of a reading of x1..x5
+      measurement_gain: [1, 0.3, 0.3, 1, 1]  # state update: weight of a reading of x1..x5
       spike_threshold_k: 3.0      # isolated temperature jumps treated as missing
       fixed: []                   # parameters never calibrated on this panel
 
@@ -133,11 +133,14 @@ class Calibration:
         "their one-step model error is far below the 0.2 K thermocouple noise, and a 300 s "
         "low-pass let that noise walk their offsets", unit="s", ge=0, le=86400)
     measurement_gain: tuple[float, ...] = setting(
-        (1.0, 1.0, 1.0, 1.0, 1.0), doc="State update: weight of a new reading of x1..x5 (one "
+        (1.0, 0.3, 0.3, 1.0, 1.0), doc="State update: weight of a new reading of x1..x5 (one "
         "per state) against the model's one-step prediction (1 = take the reading as it is, "
         "the paper's update; lower filters white sensor noise, the steady-state Kalman gain "
         "of a sensor noise σ_y and a model error σ_m is about σ_m/σ_y for σ_m ≪ σ_y, so only "
-        "the slow panes x2, x3 gain from it)", gt=0, le=1)
+        "the slow panes x2, x3 gain from it). The inner panes sit behind the cavity: their "
+        "one-step model error is far below the 0.2 K thermocouple noise, and taking each "
+        "reading as it is starts every prediction from that noise. A panel whose panes' "
+        "model error exceeds the sensor noise (long sampling interval) wants 1", gt=0, le=1)
     spike_threshold_k: float = setting(
         3.0, doc="A temperature sample that jumps by more than this from both neighbours "
         "(which agree) is treated as missing", unit="K", gt=0, le=100)

@@ -3,9 +3,10 @@
 Each step the model predicts x_{k+1} from the current estimate x̂_k; the estimate is then
 corrected by the measurements where they exist:
 
-* x1..x5: the measured value (``calibration.measurement_gain`` 1, the paper's update), or
-  the prediction moved towards it by that gain (a fixed-gain filter of sensor noise); a
-  missing (NaN) or flagged value keeps the prediction;
+* x1..x5: the prediction moved towards the measured value by ``calibration.measurement_gain``
+  (1 takes the reading as it is, the paper's update, the default for x1, x4, x5; the slow
+  inner panes x2, x3 default to 0.3, a fixed-gain filter of their sensor noise); a missing
+  (NaN) or flagged value keeps the prediction;
 * x6 (DGU gap gas, never measured): (x2 + x3)/2 when both panes are measured — exact at
   quasi-steady state because node 6 sees both panes through the same h_ca4 and its time
   constant (≈ 1.6 s) is far below the step (errata E19.1); otherwise the prediction;
