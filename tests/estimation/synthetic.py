@@ -23,6 +23,11 @@ TRUE_FACTORS = np.array([1.4, 0.8, 1.3, 1.25, 0.9, 1.2, 1.5, 0.7, 1.0])
 TRUE_N = 0.65
 
 
+def with_calibration(cfg: PanelConfig, **changes) -> PanelConfig:
+    """``cfg`` with the given ``calibration.*`` settings replaced."""
+    return dataclasses.replace(cfg, calibration=dataclasses.replace(cfg.calibration, **changes))
+
+
 def true_theta(cfg: PanelConfig) -> np.ndarray:
     theta = LumpedModel(cfg).default_theta() * TRUE_FACTORS
     theta[8] = TRUE_N

@@ -13,7 +13,7 @@ from dsfd.estimation.params import ParameterSpace
 from dsfd.estimation.stepdata import model_config, step_data
 from dsfd.measured import MeasuredData
 from dsfd.physics.model import LumpedModel
-from tests.estimation.synthetic import lumped_record, true_theta
+from tests.estimation.synthetic import lumped_record, true_theta, with_calibration
 
 
 @pytest.fixture(scope="module")
@@ -62,8 +62,7 @@ def test_one_outlier_moves_no_estimate_by_more_than_its_standard_error(suwon, re
     data, _ = record
     cfg = suwon
     if not spike_filter:  # the robust loss alone must hold the fit
-        cfg = dataclasses.replace(suwon, calibration=dataclasses.replace(
-            suwon.calibration, spike_threshold_k=100.0))
+        cfg = with_calibration(suwon, spike_threshold_k=100.0)
     bad = _with(data, "x2_c", len(data) // 2, 15.0)
     steps = step_data(cfg, bad)
     model = LumpedModel(model_config(cfg, steps.step_s))
@@ -95,8 +94,7 @@ def test_estimates_stay_inside_the_bounds(suwon):
 def test_the_outlier_matters_without_robust_loss_and_spike_filter(suwon, record, clean_fit):
     """Control for the test above: with a plain quadratic loss the same sample does move θ."""
     data, _ = record
-    cfg = dataclasses.replace(suwon, calibration=dataclasses.replace(
-        suwon.calibration, spike_threshold_k=100.0, loss="linear"))
+    cfg = with_calibration(suwon, spike_threshold_k=100.0, loss="linear")
     steps = step_data(cfg, _with(data, "x2_c", len(data) // 2, 15.0))
     state, _ = offline_fit(LumpedModel(model_config(cfg, steps.step_s)), steps)
     ref, _ = clean_fit

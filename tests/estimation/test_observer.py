@@ -2,14 +2,12 @@
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 
 from dsfd.estimation.observer import fill_state, observe
 from dsfd.estimation.stepdata import model_config, step_data
 from dsfd.physics.model import LumpedModel
-from tests.estimation.synthetic import lumped_record, true_theta
+from tests.estimation.synthetic import lumped_record, true_theta, with_calibration
 
 
 def test_gain_one_takes_the_readings_and_gaps_keep_the_prediction():
@@ -72,8 +70,7 @@ def test_default_update_filters_the_inner_panes_noise_out_of_the_next_prediction
     steps = step_data(suwon, data)
     rms = {}
     for gain in ((1.0,) * 5, suwon.calibration.measurement_gain):
-        cfg = dataclasses.replace(suwon, calibration=dataclasses.replace(
-            suwon.calibration, measurement_gain=gain))
+        cfg = with_calibration(suwon, measurement_gain=gain)
         track = observe(LumpedModel(model_config(cfg, steps.step_s)), steps, theta[None])
         err = track.x_pred[0, 11:, :5] - steps.y_k[11:]  # after the start-up
         rms[gain[1]] = np.sqrt(np.nanmean(err ** 2, axis=0))

@@ -15,7 +15,7 @@ from dsfd.estimation.state import state_from_dict
 from dsfd.estimation.stepdata import model_config, step_data
 from dsfd.physics.model import LumpedModel
 from tests.conftest import PANELS
-from tests.estimation.synthetic import lumped_record, true_theta
+from tests.estimation.synthetic import lumped_record, true_theta, with_calibration
 
 
 def _setup(cfg, **record):
@@ -125,8 +125,7 @@ def test_inner_pane_offsets_average_out_white_sensor_noise(suwon):
     asks for below 0.6. x1 and x4 keep 300 s and barely change. The states take each
     reading as it is (gain 1), so the innovations are the sensor noise alone, unfiltered.
     """
-    suwon = dataclasses.replace(suwon, calibration=dataclasses.replace(
-        suwon.calibration, measurement_gain=(1.0,) * 5))
+    suwon = with_calibration(suwon, measurement_gain=(1.0,) * 5)
     theta = true_theta(suwon)
     data, _ = lumped_record(suwon, theta, step_s=60.0, hours=3.0, seed=5, noise_k=0.2)
     steps = step_data(suwon, data)
@@ -134,8 +133,7 @@ def test_inner_pane_offsets_average_out_white_sensor_noise(suwon):
     track = observe(model, steps, theta[None])
     spread = {}
     for tau in ((300.0, 300.0, 300.0, 300.0), suwon.calibration.innovation_smoothing_s):
-        settings = dataclasses.replace(suwon.calibration, innovation_smoothing_s=tau)
-        m = LumpedModel(model_config(dataclasses.replace(suwon, calibration=settings),
+        m = LumpedModel(model_config(with_calibration(suwon, innovation_smoothing_s=tau),
                                      steps.step_s))
         cal = OnlineCalibrator(m)
         cal.state = dataclasses.replace(cal.state, theta=np.concatenate([theta, np.zeros(4)]))

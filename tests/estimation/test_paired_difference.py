@@ -2,14 +2,12 @@
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import pytest
 
 from dsfd.estimation.stepdata import step_data
 from dsfd.estimation.validation import STATES, paired_difference, replay_scores
-from tests.estimation.synthetic import lumped_record, true_theta
+from tests.estimation.synthetic import lumped_record, true_theta, with_calibration
 
 
 def test_identical_errors_differ_by_zero():
@@ -52,8 +50,7 @@ def test_fewer_than_two_batches_has_no_standard_error():
 
 def test_replay_reports_the_difference_of_the_mean_absolute_errors(suwon):
     # the mean of |e_a| − |e_b| over the same samples is MAE_a − MAE_b exactly
-    cfg = dataclasses.replace(suwon, calibration=dataclasses.replace(
-        suwon.calibration, update_interval_s=1800.0, max_nfev=4))
+    cfg = with_calibration(suwon, update_interval_s=1800.0, max_nfev=4)
     data, _ = lumped_record(cfg, true_theta(cfg), step_s=300.0, hours=4.0, seed=5)
     steps = step_data(cfg, data)
     out = replay_scores(cfg, steps, offline_theta=true_theta(cfg), horizons=(1,))

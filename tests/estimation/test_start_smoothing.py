@@ -13,7 +13,7 @@ from dsfd.estimation.calibration import offline_fit
 from dsfd.estimation.objective import rollout_starts, savgol_centre_weights, smoothed_starts
 from dsfd.estimation.stepdata import model_config, step_data
 from dsfd.physics.model import LumpedModel
-from tests.estimation.synthetic import lumped_record, true_theta
+from tests.estimation.synthetic import lumped_record, true_theta, with_calibration
 
 H_IN = 5
 
@@ -101,8 +101,7 @@ def test_smoothed_starts_remove_the_bias_of_h_in(suwon):
     record's h_in scatters by about ±4 %, as much as the bar, so three would test the noise.
     The observer takes each reading as it is (gain 1): the default filter on the inner panes
     already removes part of the bias from the start states, which is not what this tests."""
-    suwon = dataclasses.replace(suwon, calibration=dataclasses.replace(
-        suwon.calibration, measurement_gain=(1.0,) * 5))
+    suwon = with_calibration(suwon, measurement_gain=(1.0,) * 5)
     theta = true_theta(suwon)
     model = LumpedModel(model_config(suwon, 60.0))
     bias = {0.0: [], 480.0: []}
