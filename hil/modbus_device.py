@@ -6,7 +6,7 @@ N). Each configured point gets its own ``SimData`` span, so reads of unmapped re
 ILLEGAL_ADDRESS like a strict real device — unless ``fill_gaps=True``, which maps every
 register between a table's first and last point.
 
-Values are set in engineering units and encoded with the same :mod:`dsfd.drivers.registers`
+Values are set in engineering units and encoded with the same :mod:`dsfd.registers`
 map the driver decodes with. Faults:
 
 * :meth:`EmulatedModbusDevice.stop` / :meth:`resume` — device down / back (register contents
@@ -38,7 +38,7 @@ from pymodbus.pdu import ModbusPDU
 from pymodbus.server import ModbusSerialServer, ModbusTcpServer
 from pymodbus.simulator import DataType, SimData, SimDevice
 
-from dsfd.drivers.registers import RegisterPoint, decode, encode, from_pattern
+from dsfd.registers import RegisterPoint, decode, encode, from_pattern
 
 if TYPE_CHECKING:
     from dsfd.config.devices import DeviceConfig

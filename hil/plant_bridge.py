@@ -34,7 +34,7 @@ import time
 from collections import Counter
 from collections.abc import Mapping
 
-from dsfd.sim.plant import Plant
+from dsfd.sim.plant.plant import Plant
 from hil.modbus_device import EmulatedModbusDevice
 from hil.station import StationEmulator
 

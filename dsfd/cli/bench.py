@@ -20,7 +20,7 @@ DEFAULT_PANEL = Path("config/panels/suwon-south.yaml")
 
 
 def _bench_plant(args: argparse.Namespace) -> dict[str, float]:
-    from dsfd.sim.bench_plant import DEFAULT_WEATHER, bench_plant
+    from dsfd.bench.plant import DEFAULT_WEATHER, bench_plant
 
     cfg = load_panel(args.config)
     return bench_plant(cfg, days=3.0 if args.days is None else args.days, seed=args.seed,
@@ -28,14 +28,14 @@ def _bench_plant(args: argparse.Namespace) -> dict[str, float]:
 
 
 def _bench_plant_velocity(args: argparse.Namespace) -> dict[str, float]:
-    from dsfd.sim.bench_velocity import bench_plant_velocity
+    from dsfd.bench.velocity import bench_plant_velocity
 
     return bench_plant_velocity(load_panel(args.config), seeds=args.seeds, days=args.days,
                                 weather=args.weather)
 
 
 def _bench_daemon(args: argparse.Namespace) -> dict[str, float]:
-    from dsfd.daemon.bench import DEFAULT_CYCLES, bench_daemon
+    from dsfd.bench.daemon import DEFAULT_CYCLES, bench_daemon
 
     cycles = DEFAULT_CYCLES if args.days is None else round(args.days * 1440)
     return bench_daemon(args.config, cycles=cycles, seed=args.seed, weather=args.weather,
@@ -43,25 +43,25 @@ def _bench_daemon(args: argparse.Namespace) -> dict[str, float]:
 
 
 def _bench_calibration(args: argparse.Namespace) -> dict[str, float]:
-    from dsfd.sim.bench_calibration import bench_calibration
+    from dsfd.bench.calibration import bench_calibration
 
     return bench_calibration(load_panel(args.config), seed=args.seed)
 
 
 def _bench_model(args: argparse.Namespace) -> dict[str, float]:
-    from dsfd.sim.bench_model import bench_model
+    from dsfd.bench.model import bench_model
 
     return bench_model(args.config)
 
 
 def _bench_control(args: argparse.Namespace) -> dict[str, float]:
-    from dsfd.sim.bench_control import bench_control
+    from dsfd.bench.control import bench_control
 
     return bench_control(args.config, cases=args.cases, seed=args.seed)
 
 
 def _bench_paper_tables(args: argparse.Namespace) -> dict[str, float]:
-    from dsfd.sim.paper_tables import VALIDATION_DAYS, WEATHER, paper_tables, report
+    from dsfd.bench.paper_tables import VALIDATION_DAYS, WEATHER, paper_tables, report
 
     figures = paper_tables(load_panel(args.config), seed=args.seed,
                            weather=args.weather or WEATHER,

@@ -12,8 +12,8 @@ from dsfd.measured import (
     MeasuredDataError,
     iso_utc,
     parse_iso_utc,
-    read_measured,
 )
+from dsfd.storage.measured_csv import read_measured
 
 
 def register(sub: argparse._SubParsersAction) -> None:

@@ -86,9 +86,9 @@ def shifted(series: WeatherSeries, offset_k: float) -> WeatherSeries:
 def run(args: argparse.Namespace, cfg: PanelConfig, series: WeatherSeries,
         hours: float | None) -> int:
     from dsfd.estimation.params import ParameterSpace
-    from dsfd.sim.actuators import Command
     from dsfd.sim.closed_loop import DEFAULT_FIXED, ClosedLoopSettings, run_closed_loop
-    from dsfd.sim.plant_config import PlantOptions
+    from dsfd.sim.plant.actuators import Command
+    from dsfd.sim.plant.config import PlantOptions
     from dsfd.storage.calibration_file import read_params
 
     cfg = panel_for_run(cfg, args)

@@ -28,7 +28,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from dsfd.convert.aalborg import convert_aalborg
-    from dsfd.measured import iso_utc, write_measured
+    from dsfd.measured import iso_utc
+    from dsfd.storage.measured_csv import write_measured
 
     if not 1990 <= args.year <= 2100:
         print(f"dsfd convert-aalborg: --year {args.year}: expected 1990..2100", file=sys.stderr)

@@ -103,8 +103,14 @@ def run(args: argparse.Namespace) -> int:
         for issue in exc.issues:
             print(f"  {issue}", file=sys.stderr)
         return EXIT_USAGE
+    plant = None
     if opts.simulated_plant:
-        from dsfd.daemon.sim_plant import DEFAULT_WEATHER, cycles_covered, weather_window
+        from dsfd.sim.daemon_plant import (
+            DEFAULT_WEATHER,
+            cycles_covered,
+            plant_for_run,
+            weather_window,
+        )
 
         try:
             series, start = weather_window(cfg, weather=opts.weather or DEFAULT_WEATHER,
@@ -115,6 +121,7 @@ def run(args: argparse.Namespace) -> int:
         if opts.cycles is None:  # until the weather record ends
             opts = dataclasses.replace(opts, cycles=cycles_covered(
                 series, start_s=start, period_s=cfg.daemon.cycle_period_s))
+        plant = plant_for_run(cfg, opts)
     configure_logging()
     print(f"dsfd run — panel {cfg.panel.id} ({opts.mode})")
     if opts.dry_run:
@@ -125,9 +132,12 @@ def run(args: argparse.Namespace) -> int:
         print("  simulated plant: nothing is written to hardware")
     print(f"  state directory: {state_dir}"
           + (" (temporary, removed at exit; --state-dir keeps it)" if temporary else ""))
+    from dsfd.storage.timeseries import SchemaTooNewError
+
     try:
-        summary = asyncio.run(serve(opts, cfg, state_dir=state_dir))
-    except OSError as exc:  # e.g. a state directory the service user cannot write
+        summary = asyncio.run(serve(opts, cfg, state_dir=state_dir, plant=plant))
+    except (OSError, SchemaTooNewError) as exc:  # e.g. a state directory the service user
+        # cannot write, or a database of a newer dsfd (kept as it is)
         print(f"dsfd run: {exc}", file=sys.stderr)
         return EXIT_FAILURE
     finally:

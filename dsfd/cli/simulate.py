@@ -141,9 +141,9 @@ def _run_lumped(args: argparse.Namespace, cfg, series, hours: float | None) -> i
 
 
 def _run_truth(args: argparse.Namespace, cfg, series, hours: float | None) -> int:
-    from dsfd.measured import write_measured
-    from dsfd.sim.actuators import Command, CommandError
+    from dsfd.sim.plant.actuators import Command, CommandError
     from dsfd.sim.truth_run import run_truth, summarize_truth
+    from dsfd.storage.measured_csv import write_measured
 
     explicit = args.phi_deg is not None or args.afr is not None
     or_pct = 100.0 if args.or_pct is None else args.or_pct

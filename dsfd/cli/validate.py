@@ -9,7 +9,8 @@ from pathlib import Path
 
 from dsfd.cli.calibrate import select_rows
 from dsfd.config import ConfigError, load_panel
-from dsfd.measured import iso_utc, read_measured
+from dsfd.measured import iso_utc
+from dsfd.storage.measured_csv import read_measured
 
 MODELS = (("online", "self-calibrating"), ("offline", "off-line"),
           ("uncalibrated", "uncalibrated"), ("persistence", "persistence"))

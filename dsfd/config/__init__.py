@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from dsfd.config.loader import ConfigError, ConfigIssue, build, load_yaml
+from dsfd.config.loader import ConfigError, ConfigIssue, build
 from dsfd.config.panel import PARAMETER_NAMES, REGIME_OPENINGS, PanelConfig
 
 __all__ = [
@@ -25,5 +25,7 @@ def panel_from_mapping(data: object, *, source: str | None = None) -> PanelConfi
 
 def load_panel(path: str | Path) -> PanelConfig:
     """Read and validate one panel YAML file; raise :class:`ConfigError` naming key paths."""
+    from dsfd.config.yaml_file import load_yaml  # only the edges read files
+
     data = load_yaml(path)
     return panel_from_mapping(data, source=str(path))

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 from dsfd.config.loader import Problem, setting
-from dsfd.drivers.registers import (
+from dsfd.registers import (
     RegisterPoint,
     overlaps,
     plan_reads,

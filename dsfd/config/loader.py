@@ -7,6 +7,9 @@ failed cross-field check) as a :class:`ConfigIssue` carrying the dotted key path
 (``facade.cavity_depth_m``, ``drivers.modbus[0].registers[2].address``) and the bad
 value, then raises one :class:`ConfigError` holding them all.
 
+Parsing the YAML text itself is :mod:`dsfd.config.yaml_file`, so that importing the settings
+types does not import ``yaml`` (the pure core takes these types).
+
 Cross-field checks live on the dataclass as a method ``check(self) -> list[Problem]``;
 a :class:`Problem` names the offending key relative to that dataclass.
 """
@@ -19,10 +22,7 @@ import types
 import typing
 from collections.abc import Mapping
 from dataclasses import MISSING, dataclass, field
-from pathlib import Path
 from typing import Any, Literal, TypeVar, get_args, get_origin, get_type_hints
-
-import yaml
 
 T = TypeVar("T")
 
@@ -31,7 +31,6 @@ __all__ = [
     "ConfigIssue",
     "Problem",
     "build",
-    "load_yaml",
     "setting",
 ]
 
@@ -121,41 +120,6 @@ def setting(
     if default_factory is not MISSING:
         return field(default_factory=default_factory, metadata=meta)
     return field(default=default, metadata=meta)
-
-
-class _DuplicateKeyLoader(yaml.SafeLoader):
-    """SafeLoader that refuses duplicate mapping keys instead of silently keeping the last."""
-
-
-def _construct_mapping(loader: _DuplicateKeyLoader, node: yaml.MappingNode, deep: bool = False):
-    seen: dict[Any, Any] = {}
-    for key_node, _ in node.value:
-        key = loader.construct_object(key_node, deep=deep)
-        if key in seen:
-            mark = key_node.start_mark
-            raise yaml.constructor.ConstructorError(
-                None, None, f"duplicate key {key!r} (line {mark.line + 1})", mark
-            )
-        seen[key] = True
-    return loader.construct_mapping(node, deep=deep)
-
-
-_DuplicateKeyLoader.add_constructor(
-    yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping
-)
-
-
-def load_yaml(path: str | Path) -> Any:
-    """Parse a YAML file; syntax errors and duplicate keys become a :class:`ConfigError`."""
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ConfigError([ConfigIssue("", str(path), f"cannot read file: {exc}")]) from exc
-    try:
-        return yaml.load(text, Loader=_DuplicateKeyLoader)
-    except yaml.YAMLError as exc:
-        raise ConfigError([ConfigIssue("", str(path), f"invalid YAML: {exc}")], str(path)) from exc
 
 
 def build(cls: type[T], data: Any, *, source: str | None = None, prefix: str = "") -> T:

@@ -46,7 +46,6 @@ from dsfd.daemon.observer import STATE_SIGNALS, StateEstimate, StateObserver
 from dsfd.daemon.quality import QualityChecker, QualityReport
 from dsfd.daemon.record import cycle_record
 from dsfd.daemon.safety import SafetyContext, SafetyPipeline, SafetyResult
-from dsfd.daemon.storage import Store
 from dsfd.daemon.weather import CycleWeather, forecast_forcing, measured_weather
 from dsfd.drivers.base import (
     Command,
@@ -60,6 +59,7 @@ from dsfd.drivers.base import (
 from dsfd.physics.constants import T_ZERO
 from dsfd.physics.forcing import FacadeOptics, Forcing, WeatherInputs, step_inputs
 from dsfd.physics.model import LumpedModel
+from dsfd.storage.timeseries import Store
 
 __all__ = ["Controller", "CycleOutcome", "OffLoopJob"]
 

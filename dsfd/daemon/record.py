@@ -5,8 +5,8 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING, Any
 
-from dsfd.daemon.storage import CycleRecord
 from dsfd.measured import iso_utc
+from dsfd.storage.timeseries import CycleRecord
 
 if TYPE_CHECKING:
     from dsfd.daemon.calibration import CalibrationStage

@@ -22,7 +22,7 @@ import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from dsfd import __version__
 from dsfd.config import ConfigError, ConfigIssue, PanelConfig, load_panel
@@ -36,19 +36,37 @@ from dsfd.daemon.loop import (
     CycleOutcome,
 )
 from dsfd.daemon.notify import Notifier
-from dsfd.daemon.storage import Store
 from dsfd.daemon.summary import RunSummary
 from dsfd.drivers.base import Driver
 from dsfd.measured import iso_utc
 from dsfd.physics.model import LumpedModel
 from dsfd.signals import ACTUATOR_NAMES
+from dsfd.storage.timeseries import Store
 
-if TYPE_CHECKING:
-    from dsfd.daemon.sim_plant import SimulatedPlant
-
-__all__ = ["RunOptions", "load_for_run", "runtime_problems", "serve"]
+__all__ = ["PlantUnderTest", "RunOptions", "load_for_run", "runtime_problems", "serve"]
 
 log = get_logger("dsfd.daemon")
+
+
+class PlantUnderTest(Protocol):
+    """A simulated plant the daemon runs against instead of the devices (``--plant sim``).
+
+    The CLI builds it (:func:`dsfd.sim.daemon_plant.simulated_plant`) and hands it to
+    :func:`serve`, so the daemon does not depend on the simulation package.
+    """
+
+    @property
+    def driver(self) -> Driver: ...
+
+    @property
+    def start_s(self) -> float: ...
+
+    @property
+    def notes(self) -> tuple[str, ...]: ...
+
+    def room_heat(self) -> tuple[dict[str, float], float]:
+        """Heat into the room since the start [J] by term, and the hours it covers."""
+        ...
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -278,22 +296,21 @@ def limit_malloc_arenas(arenas: int = 1) -> bool:
 
 
 async def serve(opts: RunOptions, cfg: PanelConfig, *, state_dir: Path,
+                plant: PlantUnderTest | None = None,
                 print_line: Callable[[str], None] = print) -> RunSummary:
-    """Run the daemon until the cycles are done or a signal stops it; return the summary."""
+    """Run the daemon until the cycles are done or a signal stops it; return the summary.
+
+    ``plant`` is the simulated plant of ``--plant sim`` (its driver replaces the devices and
+    the clock starts at its start); without it the panel's ``devices:`` are opened.
+    """
     limit_malloc_arenas()
     bind_contextvars(panel=cfg.panel.id)
     notifier = Notifier()
     clock: Clock
-    sim: SimulatedPlant | None = None
-    if opts.simulated_plant:
-        from dsfd.daemon.sim_plant import DEFAULT_WEATHER, plant_options, simulated_plant
-
-        sim = simulated_plant(cfg, weather=opts.weather or DEFAULT_WEATHER,
-                              start_s=opts.start_s, cycles=opts.cycles, seed=opts.seed,
-                              options=plant_options(opts.plant_fidelity))
-        clock = SimulatedClock(start_utc_s=sim.start_s, speed=opts.speed)
-        driver: Driver = sim.driver
-        for note in sim.notes:
+    if plant is not None:
+        clock = SimulatedClock(start_utc_s=plant.start_s, speed=opts.speed)
+        driver: Driver = plant.driver
+        for note in plant.notes:
             print_line(f"  {note}")
     else:
         from dsfd.drivers.factory import build_drivers
@@ -340,9 +357,8 @@ async def serve(opts: RunOptions, cfg: PanelConfig, *, state_dir: Path,
         finally:
             store.close()
             notifier.close()
-    heat = None if sim is None else sim.plant.room_heat_j()
-    daemon.summary.finish(calibration, room_heat_j=heat, room_heat_h=0.0 if sim is None
-                          else (sim.plant.time_s - sim.start_s) / 3600.0)
+    heat, hours = (None, 0.0) if plant is None else plant.room_heat()
+    daemon.summary.finish(calibration, room_heat_j=heat, room_heat_h=hours)
     log.info("daemon stopped", reason=reason, cycles=daemon.summary.cycles,
              cycle_failures=daemon.cycle_failures)
     return daemon.summary

@@ -39,7 +39,8 @@ from pymodbus.exceptions import ConnectionException, ModbusException, ModbusIOEx
 
 from dsfd.drivers.base import Command, Quality, Reading, Sample, WriteResult, command_from_values
 from dsfd.drivers.modbus_link import ModbusLink, configure_pymodbus_logging
-from dsfd.drivers.registers import (
+from dsfd.drivers.resilience import CircuitBreaker
+from dsfd.registers import (
     RegisterBlock,
     RegisterPoint,
     decode,
@@ -48,7 +49,6 @@ from dsfd.drivers.registers import (
     plan_reads,
     plan_writes,
 )
-from dsfd.drivers.resilience import CircuitBreaker
 
 if TYPE_CHECKING:
     from dsfd.config.devices import DeviceConfig

@@ -1,7 +1,7 @@
 """A :class:`~dsfd.drivers.base.Driver` around the in-process simulated plant (dry runs, benches).
 
 ``dsfd run --plant sim`` replaces the panel's devices by this driver: the truth plant of
-:mod:`dsfd.sim.plant` replays real weather, and the daemon reads its sensors and commands its
+:mod:`dsfd.sim.plant.plant` replays real weather, and the daemon reads its sensors and commands its
 actuators through the same :class:`Sample`/:class:`Quality` semantics as the Modbus and serial
 drivers:
 
@@ -39,7 +39,7 @@ _TIME_EPS_S = 1e-6
 
 
 class PlantLike(Protocol):
-    """What the driver needs of :class:`dsfd.sim.plant.Plant`."""
+    """What the driver needs of :class:`dsfd.sim.plant.plant.Plant`."""
 
     @property
     def time_s(self) -> float: ...

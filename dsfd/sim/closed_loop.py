@@ -3,7 +3,7 @@
 ``dsfd simulate --plant truth --controller C --calibration K`` runs the daemon's own cycle
 (:class:`dsfd.daemon.loop.Controller`: read → quality → state estimate → calibration →
 optimise → safety → write → store) on a simulated clock against the truth plant of
-:mod:`dsfd.sim.plant`, so the energy figures are those of the production pipeline, with
+:mod:`dsfd.sim.plant.plant`, so the energy figures are those of the production pipeline, with
 its sensor noise, actuator dynamics, 18° louver quantisation and louver move interval.
 
 Controllers:
@@ -15,14 +15,14 @@ Controllers:
 * ``oracle`` — the ``mpc`` optimiser with perfect information: the plant's true mid-height
   state instead of the observer, the true weather of the horizon instead of persistence, and
   the plant's own parameters mapped to the lumped model
-  (:meth:`~dsfd.sim.plant_config.TrueParameters.lumped_theta`) instead of a calibration.
+  (:meth:`~dsfd.sim.plant.config.TrueParameters.lumped_theta`) instead of a calibration.
   It bounds what better information can buy the optimiser; it is not a global optimum
   (the optimiser still plans on the lumped model over 15 minutes).
 
 Calibration: ``online`` (the daemon's on-line self-calibration), ``offline`` (θ̂ from a
 ``dsfd calibrate`` parameter file, frozen) or ``none`` (the panel's defaults, frozen).
 
-Energy is the plant's own room-side heat (:meth:`~dsfd.sim.plant.Plant.room_heat_j`,
+Energy is the plant's own room-side heat (:meth:`~dsfd.sim.plant.plant.Plant.room_heat_j`,
 integrated inside its ODE), cycle by cycle; J follows physics §12.5 with the mode the cycle
 decided in (heating: J = −ΣQ; cooling: J = Σ(Q_cv,rd + Q_sol + Q_air − Q_DA)).
 """
@@ -49,7 +49,6 @@ from dsfd.daemon.calibration import CalibrationStage
 from dsfd.daemon.clock import SimulatedClock, Slot
 from dsfd.daemon.loop import Controller
 from dsfd.daemon.observer import StateEstimate
-from dsfd.daemon.storage import Store
 from dsfd.daemon.weather import CycleWeather
 from dsfd.drivers.base import Command as DriverCommand
 from dsfd.drivers.simulated import SimulatedDriver
@@ -59,11 +58,12 @@ from dsfd.physics.constants import T_ZERO
 from dsfd.physics.forcing import Forcing, WeatherInputs, facade_forcing
 from dsfd.physics.model import LumpedModel
 from dsfd.physics.solar import extraterrestrial_irradiance, solar_position
-from dsfd.sim.actuators import Command
-from dsfd.sim.plant import Plant
-from dsfd.sim.plant_config import PlantOptions
-from dsfd.sim.plant_model import ROOM_FLOWS
+from dsfd.sim.plant.actuators import Command
+from dsfd.sim.plant.config import PlantOptions
+from dsfd.sim.plant.model import ROOM_FLOWS
+from dsfd.sim.plant.plant import Plant
 from dsfd.sim.replay import at_site, step_window
+from dsfd.storage.timeseries import Store
 from dsfd.weather import WeatherSeries
 
 __all__ = ["CALIBRATIONS", "CONTROLLERS", "ClosedLoopResult", "ClosedLoopSettings",

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dsfd.config.panel import PanelConfig
-from dsfd.sim.actuators import Command, validate_command
+from dsfd.sim.plant.actuators import Command, validate_command
 
 #: Regimes of the paper's Table 1 (mean cavity velocities 2.8–14.1 cm/s).
 PAPER_REGIMES = (1, 3, 5, 6)

@@ -15,12 +15,12 @@ import numpy as np
 
 from dsfd.config.panel import PanelConfig
 from dsfd.measured import MeasuredData
-from dsfd.sim.actuators import Command
-from dsfd.sim.plant import Plant
-from dsfd.sim.plant_config import PlantOptions, TrueParameters
+from dsfd.sim.plant.actuators import Command
+from dsfd.sim.plant.config import PlantOptions, TrueParameters
+from dsfd.sim.plant.plant import Plant
+from dsfd.sim.plant.sensors import SensorConfig
 from dsfd.sim.protocol import Schedule, paper_protocol
 from dsfd.sim.replay import at_site, step_window
-from dsfd.sim.sensors import SensorConfig
 from dsfd.weather import WeatherSeries
 
 CONTROL_KEYS = ("phi_deg", "afr", "or_pct")

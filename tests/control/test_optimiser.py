@@ -7,6 +7,7 @@ import dataclasses
 import numpy as np
 import pytest
 
+from dsfd.bench.control_cases import day_forcing, random_problems
 from dsfd.config import load_panel
 from dsfd.control.bruteforce import brute_force
 from dsfd.control.optimiser import (
@@ -18,7 +19,6 @@ from dsfd.control.optimiser import (
 from dsfd.control.paper_sqp import optimise_paper_sqp
 from dsfd.physics.constants import T_ZERO
 from dsfd.physics.forcing import step_inputs
-from dsfd.sim.control_cases import day_forcing, random_problems
 from dsfd.sim.openloop import first_step
 from tests.conftest import PANELS
 

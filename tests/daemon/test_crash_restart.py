@@ -90,3 +90,24 @@ def test_corrupt_database_is_moved_aside_and_a_new_one_started(tmp_path: Path) -
     assert query(db, "SELECT COUNT(*) FROM decisions")[0][0] == 2
     (kind, message), = query(db, "SELECT kind, message FROM events WHERE level = 'error'")
     assert kind == "database_recovered" and moved.name in message
+
+
+def test_a_database_of_a_newer_dsfd_is_refused_and_left_as_it_is(tmp_path: Path) -> None:
+    panel = write_panel(tmp_path / "panel.yaml", devices=False)
+    state = tmp_path / "state"
+    state.mkdir()
+    db = state / "timeseries.sqlite"
+    with sqlite3.connect(db) as conn:
+        conn.execute("CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL)")
+        conn.execute("INSERT INTO meta VALUES ('schema_version', '999')")
+    before = db.read_bytes()
+
+    async def run() -> DaemonProcess:
+        daemon = await DaemonProcess(run_args(panel, state, 2)).start()
+        assert await daemon.wait_exit() == 1, daemon.stderr
+        return daemon
+
+    daemon = asyncio.run(run())
+    assert "schema version 999" in daemon.stderr and "newer dsfd" in daemon.stderr
+    assert db.read_bytes() == before
+    assert not list(state.glob("timeseries.sqlite.corrupt.*"))

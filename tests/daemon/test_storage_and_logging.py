@@ -21,7 +21,7 @@ from dsfd.daemon.logging_setup import (
     configure_logging,
     get_logger,
 )
-from dsfd.daemon.storage import CycleRecord, Store
+from dsfd.storage.timeseries import CycleRecord, Store
 from tests.daemon.harness import ROOT
 
 SCHEMA_DOC = ROOT / "docs" / "storage-schema.md"

@@ -15,8 +15,8 @@ from pathlib import Path
 import pytest
 
 from dsfd.config import load_panel
-from dsfd.daemon.sim_plant import plant_options, simulated_plant
 from dsfd.measured import parse_iso_utc
+from dsfd.sim.daemon_plant import plant_options, simulated_plant
 from hil.modbus_device import EmulatedModbusDevice
 from hil.plant_bridge import PlantBridge
 from hil.station import StationEmulator

@@ -16,9 +16,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dsfd.sim.actuators import Command
 from dsfd.sim.closed_loop import ClosedLoopSettings, run_closed_loop
-from dsfd.sim.plant_config import PlantOptions
+from dsfd.sim.plant.actuators import Command
+from dsfd.sim.plant.config import PlantOptions
 from tests.sim.conftest import HOUR, day_start
 
 PANEL = Path(__file__).resolve().parents[2] / "config" / "panels" / "suwon-south.yaml"

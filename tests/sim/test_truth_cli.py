@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from dsfd.cli import main
-from dsfd.measured import read_measured, write_measured
-from dsfd.sim.actuators import Command
-from dsfd.sim.sensors import SENSOR_NAMES, SensorConfig, SensorFault
+from dsfd.sim.plant.actuators import Command
+from dsfd.sim.plant.sensors import SENSOR_NAMES, SensorConfig, SensorFault
 from dsfd.sim.truth_run import run_truth
+from dsfd.storage.measured_csv import read_measured, write_measured
 from tests.conftest import PANELS
 from tests.sim.conftest import HOUR, day_start
 

@@ -1,0 +1,354 @@
+"""Persistence in the state directory: the SQLite time-series store and atomic JSON files.
+
+``timeseries.sqlite`` (schema: ``docs/storage-schema.md``) holds every sample with its quality
+flag, every decision with its safety trace and stage timings, the parameter history and
+notable events. One writer (the daemon), WAL journal, ``synchronous=NORMAL`` (a crash of the
+process never loses a committed cycle; a power cut may roll back the last few), and a
+``busy_timeout`` so a reader (``sqlite3``, pandas) never makes a write fail. Each cycle is
+one transaction.
+
+A database that cannot be opened or fails its check (after a run that did not end cleanly)
+is moved aside with its ``-wal``/``-shm`` files as ``timeseries.sqlite.corrupt.<iso>`` and a
+new one is started: the controller must keep running, and the old file stays for inspection.
+
+The calibration state (``calibration.json``) is written atomically by
+:mod:`dsfd.storage.calibration_file`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import math
+import os
+import sqlite3
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+from dsfd.config.panel import PARAMETER_NAMES
+
+__all__ = [
+    "DB_NAME",
+    "MIGRATIONS",
+    "SCHEMA_VERSION",
+    "CycleRecord",
+    "SchemaTooNewError",
+    "Store",
+]
+
+DB_NAME = "timeseries.sqlite"
+SCHEMA_VERSION = 1
+#: Schema changes, in order: ``MIGRATIONS[v]`` is the SQL script that takes a database of
+#: version ``v - 1`` to ``v`` (``ALTER TABLE … ADD COLUMN``; new tables come from
+#: :data:`SCHEMA`, whose ``CREATE … IF NOT EXISTS`` always describes the newest version).
+#: To change the schema: add the columns to SCHEMA, add a step here, raise SCHEMA_VERSION,
+#: and describe it in docs/storage-schema.md.
+MIGRATIONS: dict[int, str] = {}
+BUSY_TIMEOUT_MS = 5000
+
+_PARAM_COLUMNS = ", ".join(f"{name} REAL" for name in PARAMETER_NAMES)
+SCHEMA = f"""
+CREATE TABLE IF NOT EXISTS meta (
+    key TEXT PRIMARY KEY,
+    value TEXT NOT NULL
+);
+CREATE TABLE IF NOT EXISTS runs (
+    run_id INTEGER PRIMARY KEY AUTOINCREMENT,
+    panel TEXT NOT NULL,
+    mode TEXT NOT NULL,
+    started_utc TEXT NOT NULL,
+    pid INTEGER NOT NULL,
+    version TEXT NOT NULL,
+    config_path TEXT,
+    ended_utc TEXT,
+    end_reason TEXT,
+    cycles INTEGER
+);
+CREATE TABLE IF NOT EXISTS samples (
+    run_id INTEGER NOT NULL REFERENCES runs(run_id),
+    cycle INTEGER NOT NULL,
+    time_s REAL NOT NULL,
+    signal TEXT NOT NULL,
+    value REAL,
+    quality TEXT NOT NULL,
+    detail TEXT NOT NULL DEFAULT '',
+    PRIMARY KEY (run_id, cycle, signal)
+) WITHOUT ROWID;
+CREATE INDEX IF NOT EXISTS samples_by_time ON samples (time_s, signal);
+CREATE TABLE IF NOT EXISTS decisions (
+    run_id INTEGER NOT NULL REFERENCES runs(run_id),
+    cycle INTEGER NOT NULL,
+    slot INTEGER NOT NULL,
+    time_s REAL NOT NULL,
+    time_utc TEXT NOT NULL,
+    method TEXT NOT NULL,
+    fallback_reason TEXT NOT NULL DEFAULT '',
+    heating INTEGER,
+    cost_j REAL,
+    proposed_phi_deg REAL,
+    proposed_afr INTEGER,
+    proposed_or_pct REAL,
+    phi_deg REAL NOT NULL,
+    afr INTEGER NOT NULL,
+    or_pct REAL NOT NULL,
+    write_status TEXT NOT NULL,
+    write_errors TEXT NOT NULL DEFAULT '[]',
+    trace TEXT NOT NULL DEFAULT '[]',
+    timings_ms TEXT NOT NULL DEFAULT '{{}}',
+    cycle_ms REAL NOT NULL,
+    skipped_slots INTEGER NOT NULL DEFAULT 0,
+    PRIMARY KEY (run_id, cycle)
+);
+CREATE INDEX IF NOT EXISTS decisions_by_time ON decisions (time_s);
+CREATE TABLE IF NOT EXISTS parameters (
+    run_id INTEGER NOT NULL REFERENCES runs(run_id),
+    cycle INTEGER NOT NULL,
+    time_s REAL NOT NULL,
+    source TEXT NOT NULL,
+    {_PARAM_COLUMNS},
+    other TEXT NOT NULL DEFAULT '{{}}',
+    cost REAL,
+    detail TEXT NOT NULL DEFAULT '',
+    PRIMARY KEY (run_id, cycle)
+);
+CREATE TABLE IF NOT EXISTS events (
+    event_id INTEGER PRIMARY KEY AUTOINCREMENT,
+    run_id INTEGER NOT NULL REFERENCES runs(run_id),
+    cycle INTEGER NOT NULL,
+    time_s REAL NOT NULL,
+    level TEXT NOT NULL,
+    kind TEXT NOT NULL,
+    message TEXT NOT NULL
+);
+"""
+
+
+class SchemaTooNewError(RuntimeError):
+    """The database was written by a newer dsfd; it is left as it is (never moved aside)."""
+
+
+def iso_now() -> str:
+    """Current UTC time, ISO 8601 with seconds and ``Z``."""
+    return datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
+
+
+def _num(value: float | None) -> float | None:
+    """SQL value of a number: NULL for None/NaN/inf."""
+    if value is None:
+        return None
+    value = float(value)
+    return value if math.isfinite(value) else None
+
+
+@dataclass(frozen=True)
+class CycleRecord:
+    """Everything one cycle stores, committed in one transaction.
+
+    ``samples``: (signal, value or None, quality, detail); ``decision``: column → value of the
+    ``decisions`` table; ``parameters``: (source, estimate by name, cost, detail) when the
+    parameters changed this cycle (names beyond θ, e.g. the calibrator's heat-flux offsets,
+    go into the JSON column ``other``); ``events``: (level, kind, message).
+    """
+
+    cycle: int
+    time_s: float
+    samples: Sequence[tuple[str, float | None, str, str]]
+    decision: Mapping[str, Any]
+    parameters: tuple[str, Mapping[str, float], float | None, str] | None = None
+    events: Sequence[tuple[str, str, str]] = field(default_factory=tuple)
+
+
+class Store:
+    """The time-series database of one panel (one writer: the daemon)."""
+
+    def __init__(self, path: Path, conn: sqlite3.Connection, *, moved_aside: Path | None
+                 ) -> None:
+        self.path = path
+        self.conn = conn
+        #: Where a corrupt database was moved at open, if it was.
+        self.moved_aside = moved_aside
+        self.run_id: int | None = None
+
+    # ------------------------------------------------------------------ opening
+    @classmethod
+    def open(cls, state_dir: Path) -> Store:
+        """Open (or create) ``state_dir/timeseries.sqlite``; move a corrupt one aside."""
+        state_dir.mkdir(parents=True, exist_ok=True)
+        path = state_dir / DB_NAME
+        moved: Path | None = None
+        try:
+            conn = _connect_checked(path)
+        except sqlite3.DatabaseError as exc:
+            moved = _move_aside(path)
+            conn = _connect_checked(path)
+            _insert_meta(conn, "recovered_from", f"{moved.name}: {exc}")
+        return cls(path, conn, moved_aside=moved)
+
+    def begin_run(self, *, panel: str, mode: str, version: str, config_path: str | None
+                  ) -> int:
+        """Record the start of a daemon run; returns its ``run_id``."""
+        with self.conn:
+            cur = self.conn.execute(
+                "INSERT INTO runs (panel, mode, started_utc, pid, version, config_path) "
+                "VALUES (?, ?, ?, ?, ?, ?)",
+                (panel, mode, iso_now(), os.getpid(), version, config_path))
+        self.run_id = int(cur.lastrowid or 0)
+        return self.run_id
+
+    def end_run(self, *, reason: str, cycles: int) -> None:
+        """Mark the run as cleanly ended (the next start then skips the integrity check)."""
+        if self.run_id is None:
+            return
+        with self.conn:
+            self.conn.execute("UPDATE runs SET ended_utc = ?, end_reason = ?, cycles = ? "
+                              "WHERE run_id = ?", (iso_now(), reason, cycles, self.run_id))
+
+    # ------------------------------------------------------------------ writing
+    def append(self, rec: CycleRecord) -> None:
+        """Write one cycle atomically (all rows or none)."""
+        run = self.run_id
+        if run is None:
+            raise RuntimeError("begin_run() first")
+        with self.conn:
+            self.conn.executemany(
+                "INSERT INTO samples (run_id, cycle, time_s, signal, value, quality, detail) "
+                "VALUES (?, ?, ?, ?, ?, ?, ?)",
+                [(run, rec.cycle, rec.time_s, name, _num(value), quality, detail)
+                 for name, value, quality, detail in rec.samples])
+            cols = list(rec.decision)
+            self.conn.execute(
+                f"INSERT INTO decisions (run_id, cycle, {', '.join(cols)}) "
+                f"VALUES (?, ?, {', '.join('?' for _ in cols)})",
+                (run, rec.cycle, *(_sql(rec.decision[c]) for c in cols)))
+            if rec.parameters is not None:
+                source, theta, cost, detail = rec.parameters
+                other = {k: v for k, v in theta.items() if k not in PARAMETER_NAMES}
+                self.conn.execute(
+                    f"INSERT INTO parameters (run_id, cycle, time_s, source, "
+                    f"{', '.join(PARAMETER_NAMES)}, other, cost, detail) VALUES (?, ?, ?, ?, "
+                    f"{', '.join('?' for _ in PARAMETER_NAMES)}, ?, ?, ?)",
+                    (run, rec.cycle, rec.time_s, source,
+                     *(_num(theta.get(n)) for n in PARAMETER_NAMES), _sql(other), _num(cost),
+                     detail))
+            self._events(run, rec.cycle, rec.time_s, rec.events)
+
+    def event(self, *, cycle: int, time_s: float, level: str, kind: str, message: str) -> None:
+        """Record one event outside a cycle (start-up, reload, stop)."""
+        if self.run_id is None:
+            return
+        with self.conn:
+            self._events(self.run_id, cycle, time_s, [(level, kind, message)])
+
+    def _events(self, run: int, cycle: int, time_s: float,
+                events: Iterable[tuple[str, str, str]]) -> None:
+        self.conn.executemany(
+            "INSERT INTO events (run_id, cycle, time_s, level, kind, message) "
+            "VALUES (?, ?, ?, ?, ?, ?)",
+            [(run, cycle, time_s, level, kind, msg) for level, kind, msg in events])
+
+    def close(self) -> None:
+        with contextlib.suppress(sqlite3.Error):
+            self.conn.close()
+
+
+def _sql(value: Any) -> Any:
+    if isinstance(value, float):
+        return _num(value)
+    if isinstance(value, list | tuple | dict):
+        return json.dumps(value, separators=(",", ":"), default=str)
+    if isinstance(value, bool):
+        return int(value)
+    return value
+
+
+def _connect_checked(path: Path) -> sqlite3.Connection:
+    """Connect, configure, create the schema; raise DatabaseError if the file is unusable."""
+    existed = path.exists() and path.stat().st_size > 0
+    conn = sqlite3.connect(path, timeout=BUSY_TIMEOUT_MS / 1000, check_same_thread=False,
+                           isolation_level="DEFERRED")
+    try:
+        conn.execute(f"PRAGMA busy_timeout = {BUSY_TIMEOUT_MS}")
+        # Before anything writes (even the journal mode): a newer database stays untouched.
+        version = _schema_version(conn)
+        if version is not None and version > SCHEMA_VERSION:
+            raise SchemaTooNewError(
+                f"{path}: schema version {version} was written by a newer dsfd; this one "
+                f"writes version {SCHEMA_VERSION} (upgrade dsfd, or move the file away)")
+        mode = conn.execute("PRAGMA journal_mode = WAL").fetchone()[0]
+        if str(mode).lower() != "wal":
+            raise sqlite3.DatabaseError(f"cannot switch to WAL journal (got {mode!r})")
+        conn.execute("PRAGMA synchronous = NORMAL")
+        conn.execute("PRAGMA foreign_keys = ON")
+        if existed and not _last_run_ended_cleanly(conn):
+            verdict = conn.execute("PRAGMA quick_check").fetchone()[0]
+            if verdict != "ok":
+                raise sqlite3.DatabaseError(f"quick_check: {verdict}")
+        if version is not None:
+            _migrate(conn, version)
+        with conn:
+            conn.executescript(SCHEMA)
+        if version is None:
+            _insert_meta(conn, "schema_version", str(SCHEMA_VERSION))
+            _insert_meta(conn, "created_utc", iso_now())
+    except (sqlite3.DatabaseError, SchemaTooNewError):
+        conn.close()
+        raise
+    return conn
+
+
+def _schema_version(conn: sqlite3.Connection) -> int | None:
+    """The stored schema version, or None for a new (empty) database."""
+    try:
+        row = conn.execute("SELECT value FROM meta WHERE key = 'schema_version'").fetchone()
+    except sqlite3.OperationalError:  # no meta table: a new database
+        return None
+    return None if row is None else int(row[0])
+
+
+def _migrate(conn: sqlite3.Connection, version: int) -> None:
+    """Apply the steps from ``version`` to :data:`SCHEMA_VERSION`, each in one transaction,
+    recording each in ``meta`` (``migrated_to_<v>``)."""
+    for target in range(version + 1, SCHEMA_VERSION + 1):
+        with conn:
+            for statement in filter(str.strip, MIGRATIONS[target].split(";")):
+                conn.execute(statement)
+            conn.execute("INSERT OR REPLACE INTO meta (key, value) VALUES "
+                         "('schema_version', ?)", (str(target),))
+            conn.execute("INSERT OR REPLACE INTO meta (key, value) VALUES (?, ?)",
+                         (f"migrated_to_{target}", iso_now()))
+
+
+def _last_run_ended_cleanly(conn: sqlite3.Connection) -> bool:
+    try:
+        row = conn.execute("SELECT ended_utc FROM runs ORDER BY run_id DESC LIMIT 1").fetchone()
+    except sqlite3.OperationalError:  # no runs table yet: nothing to trust, check
+        return False
+    return row is not None and row[0] is not None
+
+
+def _insert_meta(conn: sqlite3.Connection, key: str, value: str) -> None:
+    with conn:
+        conn.execute("INSERT OR REPLACE INTO meta (key, value) VALUES (?, ?)", (key, value))
+
+
+def _move_aside(path: Path) -> Path:
+    """Rename ``path`` and its ``-wal``/``-shm`` companions to ``*.corrupt.<iso>``."""
+    stamp = datetime.now(UTC).strftime("%Y%m%dT%H%M%S.%fZ")
+    target = path.with_name(f"{path.name}.corrupt.{stamp}")
+    for suffix in ("", "-wal", "-shm"):
+        src = path.with_name(path.name + suffix)
+        if src.exists():
+            os.replace(src, target.with_name(target.name + suffix))
+    _fsync_dir(path.parent)
+    return target
+
+
+def _fsync_dir(directory: Path) -> None:
+    fd = os.open(directory, os.O_RDONLY | os.O_DIRECTORY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
