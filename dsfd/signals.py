@@ -7,7 +7,7 @@ values outside it cannot be real for a façade panel in service (a broken thermo
 mis-scaled register) and are flagged by the quality checks later in the cycle. The ranges are
 deliberately wide; they catch nonsense, not unusual weather.
 
-States ``x1``..``x5`` keep the paper's names (physics.md §9); ``x6`` (room-side DGU surface
+States ``x1``..``x5`` keep the paper's names (docs/model.md#states); ``x6`` (room-side DGU surface
 node) is estimated, never measured, so it has no signal.
 """
 
@@ -92,7 +92,7 @@ _ACTUATORS = (
     Signal(name="phi_deg", role="actuator", unit="deg", lower=-90.0, upper=90.0,
            doc="Louver slat angle, 0 = horizontal"),
     Signal(name="afr", role="actuator", unit="1", lower=1.0, upper=10.0, integer=True,
-           doc="Airflow regime number 1..10 (physics §8.3)"),
+           doc="Airflow regime number 1..10 (docs/model.md#regimes)"),
     Signal(name="or_pct", role="actuator", unit="%", lower=0.0, upper=100.0,
            doc="Damper opening ratio of the open damper set"),
 )

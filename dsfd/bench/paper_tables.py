@@ -101,9 +101,10 @@ def paper_tables(cfg: PanelConfig, *, seed: int = 0, weather: str = WEATHER,
     seed : int
         Seed of the plant's true parameters, sensors and protocol.
     centre : bool
-        Give the plant the centre of the E16 prior (:meth:`TrueParameters.prior_centre`,
-        f_true ≈ 200: the plant whose speeds match the paper's Table 1, issue 3) instead of
-        the seed's draw; the seed still draws the sensors and the protocol.
+        Give the plant the centre of the true-parameter prior (docs/model.md#true-parameters)
+        (:meth:`TrueParameters.prior_centre`, f_true ≈ 200: the plant whose speeds match the paper's
+        Table 1, issue 3) instead of the seed's draw; the seed still draws the sensors and the
+        protocol.
     weather : str
         Bundled weather name or file; needs ``TRAIN_H`` + ``validation_days`` of data.
     validation_days : float

@@ -2,8 +2,9 @@
 
 Under the paper's protocol (louver angle and regime changed at random every 30–90 min,
 dampers fully open), the mean true cavity speed |v| at the probe and the anemometer's mean
-reading per regime, for the plant at the centre of the errata-E16 prior (every convective
-multiplier 1, f_true = √(20·2000) ≈ 200) and for seeded draws from the prior.
+reading per regime, for the plant at the centre of the true-parameter prior
+(docs/model.md#true-parameters) (every convective multiplier 1, f_true = √(20·2000) ≈ 200) and for
+seeded draws from the prior.
 
 By default the plant replays the weather of the paper's own airflow experiment, 8–11
 December 2008 in Suwon, reconstructed from KMA's daily statistics of that station
@@ -15,7 +16,7 @@ windier, from their second day on).
 Nothing here is tuned to the table. The speeds scale roughly as f_true^-½ and the prior
 spans two decades of f_true, so draws with a small path resistance (f_true of a few
 tens) give regime-5 speeds two to three times the paper's 14.1 cm/s; the paper's own
-Mode-1 figure implies a path loss of several hundred (errata E11).
+Mode-1 figure implies a path loss of several hundred (docs/model.md#parameters).
 """
 
 from __future__ import annotations

@@ -104,8 +104,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="plant-velocity: seeded draws of the plant's true parameters")
     p.add_argument("--weather", default=None, help="weather file or bundled name")
     p.add_argument("--prior-centre", action="store_true",
-                   help="paper-tables: the plant at the centre of the E16 prior (f_true ~ 200, "
-                   "the speeds of the paper's Table 1) instead of the seed's draw")
+                   help="paper-tables: the plant at the centre of the true-parameter prior "
+                   "(docs/model.md#true-parameters) (f_true ~ 200, the speeds of the paper's "
+                   "Table 1) instead of the seed's draw")
     p.add_argument("--json", type=Path, default=None, help="write the figures as JSON")
     p.set_defaults(handler=run)
 

@@ -124,7 +124,7 @@ def run(args: argparse.Namespace, cfg: PanelConfig, series: WeatherSeries,
           f"{result.step_s:g} s); mode {cfg.control.mode}, heating in "
           f"{s['heating_fraction']:.0%} of cycles; room {cfg.room.t_in_c:g} degC")
     print()
-    print("heat into the room [kWh] (physics §12; Q_air by "
+    print("heat into the room [kWh] (docs/model.md#room-heat; Q_air by "
           f"{cfg.model.q_air_basis}):")
     for key, label in (("q_cv_rd", "Q_cv,rd  inner pane"), ("q_sol_trans", "Q_sol    transmitted"),
                        ("q_air", "Q_air    cavity air"), ("q_da", "Q_DA     daylight")):

@@ -41,7 +41,8 @@ class Control:
     """Model-predictive control of louver angle, airflow regime and damper opening."""
 
     mode: Literal["heating", "cooling", "auto"] = setting(
-        "auto", doc="Season: fixed, or auto by outdoor temperature (physics §12.5)")
+        "auto", doc="Season: fixed, or auto by outdoor temperature "
+        "(docs/model.md#control-objective)")
     auto_heating_below_c: float = setting(
         15.0, doc="Auto mode: heating while the outdoor air is below this", unit="degC",
         ge=-20, le=35)

@@ -2,8 +2,9 @@
 
 One YAML file per panel maps onto :class:`PanelConfig`. Units are in the key names
 (``cavity_depth_m``, ``azimuth_deg``); inside the physics everything is SI and kelvin.
-References for the defaults: physics.md §2 (geometry, materials), §7 (convection),
-§8 (airflow), §12.4 (daylight proxy), §13 with errata E11 (parameter bounds).
+References for the defaults: docs/model.md#constants (geometry, materials), docs/model.md#convection
+(convection), docs/model.md#airflow (airflow), docs/model.md#q-da (daylight proxy),
+docs/model.md#parameters (parameter bounds).
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ PARAMETER_NAMES: tuple[str, ...] = (
     "h_out", "h_ca1", "h_ca2", "h_ca3", "h_ca4", "h_in", "f", "c", "n",
 )
 
-#: Damper sets of the ten airflow regimes (physics §8.3 with errata E1).
+#: Damper sets of the ten airflow regimes (docs/model.md#regimes).
 REGIME_OPENINGS: dict[int, frozenset[str]] = {
     1: frozenset({"interior_bottom", "interior_top"}),
     2: frozenset({"interior_bottom", "interior_top"}),
@@ -158,7 +159,8 @@ class Opening:
 class WindPressure:
     """Wind pressure coefficients of the bottom and top openings vs wind incidence.
 
-    Default: the Aalborg "Cube" pair (DSFModelica ``CpValues.txt``, physics §8.2).
+    Default: the Aalborg "Cube" pair (DSFModelica ``CpValues.txt``,
+    docs/model.md#driving-pressures).
     """
 
     incidence_deg: tuple[float, ...] = setting(
@@ -203,13 +205,14 @@ class Openings:
         doc="Vertical distance between bottom and top damper centres Δz", unit="m", gt=0, le=60
     )
     min_opening_ratio: float = setting(
-        0.01, doc="Floor on OR for an open damper set (errata E14)", gt=0, le=1
+        0.01, doc="Floor on OR for an open damper set (docs/model.md#openings)", gt=0, le=1
     )
     room_pressure_pa: float = setting(
         0.0, doc="Room pressure P_i at z = 0 relative to outdoors", unit="Pa", ge=-50, le=50
     )
     regularisation_pa: float = setting(
-        0.01, doc="Pressure below which flow laws are regularised (errata E10)", unit="Pa",
+        0.01, doc="Pressure below which flow laws are regularised "
+        "(docs/model.md#regularisation)", unit="Pa",
         gt=0, le=1,
     )
     wind_pressure: WindPressure = setting(
@@ -243,7 +246,7 @@ class Room:
 
 @dataclass(frozen=True, kw_only=True)
 class Daylight:
-    """Daylighting proxy Q_DA (physics §12.4)."""
+    """Daylighting proxy Q_DA (docs/model.md#q-da)."""
 
     luminous_efficacy_lmw: float = setting(110.0, doc="Luminous efficacy K", unit="lm/W", gt=0)
     utilisation: float = setting(0.3, doc="Coefficient of utilisation CU", ge=0, le=1)
@@ -256,7 +259,7 @@ class Daylight:
 class ModelOptions:
     step_s: float = setting(60.0, doc="Model time step T", unit="s", gt=0, le=3600)
     coupling: Literal["implicit", "ping_pong"] = setting(
-        "implicit", doc="Thermal–airflow coupling per step (physics §11, errata E9)"
+        "implicit", doc="Thermal–airflow coupling per step (docs/model.md#coupling)"
     )
     ping_pong_substeps: int = setting(
         1, doc="Sub-steps per step in ping-pong coupling (≤ 10 s each is stable)", ge=1, le=60
@@ -272,18 +275,19 @@ class ModelOptions:
         "matrix exponential (Van Loan reference)",
     )
     sky_model: Literal["swinbank", "clark_allen"] = setting(
-        "swinbank", doc="Sky temperature model (physics §6.1, errata E19.4)"
+        "swinbank", doc="Sky temperature model (docs/model.md#sky)"
     )
     q_air_basis: Literal["ventilation_credit", "make_up_loss"] = setting(
-        "ventilation_credit", doc="Accounting of Q_air (errata E2)"
+        "ventilation_credit", doc="Accounting of Q_air (docs/model.md#q-air)"
     )
     transposition: Literal["haydavies", "isotropic"] = setting(
-        "haydavies", doc="Sky-diffuse transposition onto the façade (physics §4.5)"
+        "haydavies", doc="Sky-diffuse transposition onto the façade (docs/model.md#transposition)"
     )
     louver_flow_loss: bool = setting(
-        True, doc="The slats' flow loss K_L(φ) (Borda–Carnot per slat row, physics §15.2) adds "
-        "to the form loss f of the orifice regimes, so the louver angle also changes the "
-        "airflow; false: the paper's model, where f alone stands for the cavity's losses")
+        True, doc="The slats' flow loss K_L(φ) (Borda–Carnot per slat row, "
+        "docs/model.md#louver-flow-loss) adds to the form loss f of the orifice regimes, so the "
+        "louver angle also changes the airflow; false: the paper's model, where f alone stands for "
+        "the cavity's losses")
     cavity_air_profile: Literal["well_mixed", "exponential"] = setting(
         "exponential", doc="What the cavity-air state x5 stands for: 'exponential' (ISO 15099 "
         "ventilated gap: the mean of an air column warming exponentially from its inlet, "
@@ -314,7 +318,7 @@ class Bounded:
 
 @dataclass(frozen=True, kw_only=True)
 class Parameters:
-    """Calibrated vector θ (physics §13 with errata E11)."""
+    """Calibrated vector θ (docs/model.md#parameters)."""
 
     h_out: Bounded = setting(doc="L1 exterior ↔ outdoor air", unit="W/(m2 K)")
     h_ca1: Bounded = setting(doc="L1 cavity face ↔ cavity air", unit="W/(m2 K)")

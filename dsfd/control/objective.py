@@ -1,10 +1,10 @@
-"""Heating and cooling cost over the horizon (paper Eq. 4–5, physics §12.5).
+"""Heating and cooling cost over the horizon (paper Eq. 4–5, docs/model.md#control-objective).
 
 J_heat = −∫ (Q_cv,rd + Q_sol,trans + Q_air + Q_DA) dt
 J_cool =  ∫ (Q_cv,rd + Q_sol,trans + Q_air − Q_DA) dt
 
-with the step-average heat flows of the lumped model (exact step averages, errata E8) and
-Q_air accounted as configured (errata E2). Costs are in joules; lower is better.
+with the step-average heat flows of the lumped model (exact step averages, docs/model.md#zoh) and
+Q_air accounted as configured (docs/model.md#q-air). Costs are in joules; lower is better.
 """
 
 from __future__ import annotations

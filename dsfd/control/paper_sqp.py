@@ -4,7 +4,7 @@ Yoon et al. solve Eq. 6 with LabVIEW's constrained nonlinear optimisation (seque
 quadratic programming), with the discrete airflow regime translated into a continuous
 AFR* and the louver angle treated as continuous, then rounded to the nearest multiple of
 18° for the motor. Here: scipy's SLSQP on (φ, AFR*, OR) scaled to [0, 1]³, finite-difference
-gradients, AFR = round(AFR*) inside the objective (physics §12.6 (b): the objective is
+gradients, AFR = round(AFR*) inside the objective (docs/model.md#paper-sqp: the objective is
 piecewise constant in AFR*, which is exactly the weakness this baseline exhibits), and
 after convergence φ rounded to the 18° grid and the rounded control re-evaluated — that
 re-evaluated cost is what the applied control achieves.

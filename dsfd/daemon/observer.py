@@ -3,8 +3,8 @@
 Each cycle the lumped model predicts the state from the previous estimate over the step
 that just ended (the actuator position that was applied, that step's weather, the current
 θ̂); then :func:`dsfd.estimation.observer.fill_state` replaces the prediction by the GOOD
-measurements of x1..x5 and sets x6 = (x2 + x3)/2 (errata E19.1). A state whose sensor is
-flagged is carried by the prediction — for at most ``daemon.max_predicted_cycles`` cycles,
+measurements of x1..x5 and sets x6 = (x2 + x3)/2 (docs/model.md#initial-state). A state whose sensor
+is flagged is carried by the prediction — for at most ``daemon.max_predicted_cycles`` cycles,
 after which the estimate is not *usable*: the optimiser then does not run and the baseline
 (or the safe state) decides.
 

@@ -18,7 +18,7 @@ if TYPE_CHECKING:
 
 __all__ = ["REGIME_NAMES", "RunSummary"]
 
-#: What each commanded airflow regime does (physics §8.3 with errata E1; the dampers set
+#: What each commanded airflow regime does (docs/model.md#regimes; the dampers set
 #: the path, the pressures the direction, so 1/2, 3/4, 5/8 and 6/7 share damper sets).
 REGIME_NAMES: dict[int, str] = {
     1: "room air up the cavity", 2: "room air down the cavity",

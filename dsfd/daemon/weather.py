@@ -6,8 +6,8 @@ outdoor air, **global horizontal** irradiance (Erbs splits it into beam and diff
 pressure. Per cycle at time t_k:
 
 * the weather of the interval that ends at t_k is evaluated at its midpoint t_k − T/2
-  (errata E19.2) — it drives the observer's prediction of the step that just ended, and the
-  baseline's sun rules;
+  (docs/model.md#time-convention) — it drives the observer's prediction of the step that just ended,
+  and the baseline's sun rules;
 * the horizon forecast is :func:`~dsfd.control.forecast.persistence_forecast` of that
   interval from t_k (air, wind and room held, clearness index held along the sun's path);
 * outdoor air and GHI are required (without them neither the optimiser nor the baseline can

@@ -7,9 +7,9 @@ For a window of steps a … z − 1 (rows a … z) and parameters θ:
 
 ψ is the model rolled out i steps from the observer state x̂_s with the recorded controls
 and weather; o runs over the measured outputs x1…x5 (σ_T) and the cavity speed |v|
-(σ_v, errata E12: the model's |Q_cav|/(D·W) against the probe); λ is the forgetting factor
-per hour of age (the paper's λ^{z−k}); ρ is the robust loss of the least-squares solver.
-Missing, flagged and out-of-window targets are left out.
+(σ_v, docs/model.md#cavity-velocity: the model's |Q_cav|/(D·W) against the probe); λ is the
+forgetting factor per hour of age (the paper's λ^{z−k}); ρ is the robust loss of the least-squares
+solver. Missing, flagged and out-of-window targets are left out.
 
 Why multi-step residuals from measured states: the controller predicts 15 steps ahead
 from the measured state every cycle, so that error is what the fit should minimise. A

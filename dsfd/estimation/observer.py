@@ -9,13 +9,13 @@ corrected by the measurements where they exist:
   (NaN) or flagged value keeps the prediction;
 * x6 (DGU gap gas, never measured): (x2 + x3)/2 when both panes are measured — exact at
   quasi-steady state because node 6 sees both panes through the same h_ca4 and its time
-  constant (≈ 1.6 s) is far below the step (errata E19.1); otherwise the prediction;
+  constant (≈ 1.6 s) is far below the step (docs/model.md#initial-state); otherwise the prediction;
 * a panel without a louver has only a dummy louver node tied to the cavity air, so an
   unmeasured x4 is set to x5.
 
 The first estimate is the steady state of the first step's inputs with the measured
-values put in (errata E19.1). A gap in the record (a step that does not span exactly one
-sampling interval) restarts the observer the same way.
+values put in (docs/model.md#initial-state). A gap in the record (a step that does not span exactly
+one sampling interval) restarts the observer the same way.
 
 Isolated spikes — a temperature that jumps by more than a threshold from both neighbours
 while the neighbours agree — are flagged by :func:`spike_mask`; the calibrator treats them

@@ -4,7 +4,8 @@ The fit vector is ϑ = (θ, q) with
 
 * θ = (h_out, h_ca1, h_ca2, h_ca3, h_ca4, h_in, f, c, n) (:data:`PARAMETER_NAMES`), the
   paper's parameters, fitted in the coordinates log θ except the exponent n (its range
-  [0.5, 1] is narrow and not a scale); bounds from the panel configuration (f per E11);
+  [0.5, 1] is narrow and not a scale); bounds from the panel configuration (f per
+  docs/model.md#parameters);
 * q = (q_x1, q_x2, q_x3, q_x4) [W/m2] (:data:`OFFSET_NAMES`), a constant heat flux added to
   the absorbed short-wave of nodes 1–4 (``StepInputs.sources``), fitted as is within
   ±``offset_bound_wm2``. They absorb what the lumped model cannot represent and the

@@ -6,7 +6,7 @@ conventions (see :mod:`dsfd.measured`) fix how rows become model steps:
 * step k runs from row k to row k + 1 (``T = t_{k+1} − t_k``, the sampling interval);
 * the controls of row k (``phi_deg``, ``afr``, ``or_pct``) apply over step k;
 * weather columns are means over the interval ENDING at their row, so step k takes the
-  weather of row k + 1, evaluated at the step midpoint t_k + T/2 (errata E19.2);
+  weather of row k + 1, evaluated at the step midpoint t_k + T/2 (docs/model.md#time-convention);
 * states (``x1_c`` … ``x5_c``, ``t_room_c``, ``v_cav_ms``) are readings at their row time:
   x(t_k) is row k, and the room temperature of step k is the mean of rows k and k + 1.
 

@@ -5,9 +5,10 @@ Openings are indexed ``EB, ET, IB, IT`` = 0..3 (exterior/interior skin, bottom/t
 bottom row sits at z = 0 and the top row at z = Δz (the stack height). Mass flows
 ``m_dot[..., k]`` are positive INTO the cavity.
 
-References: physics.md §8 with errata E1 (regime numbering), E4 (closed form with the
-outlet at cavity density), E10 (IBPSA regularisation), E12 (reported velocity), E13/E14
-(regime 9 and OR scaling, both [ENG]).
+References: docs/model.md#airflow, docs/model.md#regimes (regime numbering),
+docs/model.md#path-flows (closed form with the outlet at cavity density),
+docs/model.md#regularisation (IBPSA regularisation), docs/model.md#cavity-velocity (reported
+velocity), docs/model.md#one-node, docs/model.md#openings (regime 9 and OR scaling, both [ENG]).
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ OPENING_NAMES = ("exterior_bottom", "exterior_top", "interior_bottom", "interior
 IS_TOP = np.array([False, True, False, True])
 IS_EXTERIOR = np.array([True, True, False, False])
 
-#: Positive-direction path of each two-opening damper set (errata E1):
+#: Positive-direction path of each two-opening damper set (docs/model.md#regimes):
 #: commanded regime -> (inlet, outlet, label if ΔP > 0, label if ΔP < 0, law).
 PATHS: dict[int, tuple[int, int, int, int, str]] = {
     1: (IB, IT, 1, 2, "orifice"),
@@ -62,9 +63,9 @@ class AirflowGeometry:
     facade_area_m2 : float, [m2]
         Glazed area A_f = W·H_g.
     min_opening_ratio : float, [-]
-        Floor on OR for an open damper set (errata E14).
+        Floor on OR for an open damper set (docs/model.md#openings).
     dp_reg_pa : float, [Pa]
-        Regularisation threshold Δp_t (errata E10).
+        Regularisation threshold Δp_t (docs/model.md#regularisation).
     room_pressure_pa : float, [Pa]
         Room pressure P_i at z = 0 relative to outdoor static pressure.
     """
@@ -157,7 +158,7 @@ class FlowState(NamedTuple):
     label : ndarray (...,), int
         Realised regime label 1..10 (direction follows the driving pressure).
     q_cav : ndarray (...,), [m3/s]
-        Net upward cavity flow (ṁ_EB + ṁ_IB)/ρ_c (errata E12).
+        Net upward cavity flow (ṁ_EB + ṁ_IB)/ρ_c (docs/model.md#cavity-velocity).
     """
 
     m_dot: np.ndarray
@@ -189,8 +190,9 @@ def regularised_power(dp: np.ndarray, coef: np.ndarray, m: np.ndarray | float,
     -----
     For π = Δp/Δp_t, |π| < 1: Q = C Δp_t^m π (a + π²(b + π²(c + π² d))) with a = γ = 1.5,
     b = m²/8 − 3γ − 3m/2 + 35/8, c = −m²/4 + 3γ + 5m/2 − 21/4, d = m²/8 − γ − m + 15/8,
-    which matches value, slope and curvature of the power law at |π| = 1 (errata E10;
-    Wetter, IBPSA Modelica library, ``Airflow.Multizone.BaseClasses.powerLawFixedM``).
+    which matches value, slope and curvature of the power law at |π| = 1
+    (docs/model.md#regularisation; Wetter, IBPSA Modelica library,
+    ``Airflow.Multizone.BaseClasses.powerLawFixedM``).
     """
     dp = np.asarray(dp, float)
     mag = np.abs(dp)
@@ -206,7 +208,8 @@ def regularised_power(dp: np.ndarray, coef: np.ndarray, m: np.ndarray | float,
 
 
 def _poly_coefficients(m: np.ndarray) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
-    """IBPSA coefficients a, b, c, d of the regularising polynomial for exponent m (E10)."""
+    """IBPSA coefficients a, b, c, d of the regularising polynomial for exponent m
+    (docs/model.md#regularisation)."""
     if m.ndim == 0:
         return _poly_coefficients_scalar(float(m))
     b = m * m / 8 - 3 * _GAMMA - 1.5 * m + 35 / 8
@@ -241,7 +244,8 @@ def boundary_state(bnd: AirflowBoundary, geom: AirflowGeometry) -> tuple[np.ndar
     Returns
     -------
     p_b : ndarray (..., 4), [Pa]
-        Outdoor openings: −ρ_o g z + ½ ρ_o C_p U²; room openings: P_i − ρ_i g z (§8.2).
+        Outdoor openings: −ρ_o g z + ½ ρ_o C_p U²; room openings: P_i − ρ_i g z
+        (docs/model.md#driving-pressures).
     rho_b : ndarray (..., 4), [kg/m3]
     t_b : ndarray (..., 4), [K]
     """
@@ -261,9 +265,10 @@ def boundary_state(bnd: AirflowBoundary, geom: AirflowGeometry) -> tuple[np.ndar
 
 
 def opening_resistance(or_: np.ndarray, f: np.ndarray, geom: AirflowGeometry) -> np.ndarray:
-    """Per-opening loss coefficient K_k = 1/(C_d A_k OR)² + f/(2 A_c²) [1/m4] (§8.1, E20).
+    """Per-opening loss coefficient K_k = 1/(C_d A_k OR)² + f/(2 A_c²) [1/m4]
+    (docs/model.md#openings).
 
-    Absent dampers get K = inf. OR is floored at ``min_opening_ratio`` (errata E14).
+    Absent dampers get K = inf. OR is floored at ``min_opening_ratio`` (docs/model.md#openings).
     """
     or_eff = np.maximum(np.asarray(or_, float), geom.min_opening_ratio)[..., None]
     area = geom.area_m2 * or_eff
@@ -278,14 +283,15 @@ def path_pressure(p_b: np.ndarray, z: np.ndarray, rho_c: np.ndarray, inlet: int,
     """Driving pressure of a two-opening path at zero flow, positive inlet → outlet [Pa].
 
     ΔP = p_B,in − p_B,out + ρ_c g (z_in − z_out): the boundary pressures and the cavity's
-    hydrostatic column between the two openings (errata E1, E5).
+    hydrostatic column between the two openings (docs/model.md#regimes,
+    docs/model.md#plant-airflow).
     """
     return p_b[..., inlet] - p_b[..., outlet] + rho_c * GRAVITY * (z[inlet] - z[outlet])
 
 
 def orifice_path_mass_flow(dp: np.ndarray, k_in: np.ndarray, k_out: np.ndarray,
                            rho_in: np.ndarray, rho_c: np.ndarray, dp_t: float) -> np.ndarray:
-    """Closed-form mass flow of two orifices in series [kg/s] (errata E4).
+    """Closed-form mass flow of two orifices in series [kg/s] (docs/model.md#path-flows).
 
     ṁ = sgn(ΔP) sqrt(2|ΔP| / (K_in/ρ_in + K_out/ρ_c)): the inlet passes boundary air,
     the outlet passes cavity air. Regularised below ``dp_t`` with m = 0.5.
@@ -313,10 +319,10 @@ def louver_flow_loss(phi_rad: np.ndarray | float, *, depth_m: float, slat_width_
     Each slat row contracts the cavity to the free section D − w|cos φ| and the flow
     expands again behind it; the Borda–Carnot loss of that sudden expansion is
     ζ_row = (D/(D − w|cos φ|) − 1)² referenced to the cavity velocity, and the H_g/s rows
-    add up: K_L = (H_g/s) ζ_row (physics §15.2 [ENG, order of magnitude]; the sudden-expansion
-    loss of Idelchik, *Handbook of Hydraulic Resistance*, referred to the wide section). About
-    3.4 at φ = 0 and 0 at ±90° for the Suwon panel. It adds to the form loss f of the
-    orifice regimes.
+    add up: K_L = (H_g/s) ζ_row (docs/model.md#louver-flow-loss [ENG, order of magnitude]; the
+    sudden-expansion loss of Idelchik, *Handbook of Hydraulic Resistance*, referred to the wide
+    section). About 3.4 at φ = 0 and 0 at ±90° for the Suwon panel. It adds to the form loss f of
+    the orifice regimes.
     """
     free = depth_m - slat_width_m * np.abs(np.cos(np.asarray(phi_rad, float)))
     zeta = (depth_m / np.maximum(free, 1e-3 * depth_m) - 1.0) ** 2

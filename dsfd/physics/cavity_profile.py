@@ -1,7 +1,7 @@
 """Vertical temperature profile of the ventilated cavity air (ISO 15099 ventilated gap).
 
 The lumped model has one cavity-air node x5. Read as a *well-mixed* node (the paper's model,
-physics §9.1) the air leaves the cavity at x5. Read as the *height-mean* of an air column
+docs/model.md#network) the air leaves the cavity at x5. Read as the *height-mean* of an air column
 that warms (or cools) exponentially from its inlet towards the surfaces' temperature
 (ISO 15099's ventilated-gap model), the air leaves hotter than its mean: the outlet's
 excess over the inlet is k(a) > 1 times the mean's. This module gives that factor, so the

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 #: Stefan–Boltzmann constant [W/(m2 K4)] (CODATA 2018).
 SIGMA = 5.670374419e-8
-#: Gravitational acceleration [m/s2] (physics.md §8.5 uses 9.81).
+#: Gravitational acceleration [m/s2] (docs/model.md#airflow uses 9.81).
 GRAVITY = 9.81
 #: Specific gas constant of dry air [J/(kg K)].
 R_AIR = 287.05

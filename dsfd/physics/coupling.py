@@ -1,4 +1,4 @@
-"""One coupled thermal–airflow step of the lumped network (physics §9–§12, errata E2/E8/E9).
+"""One coupled thermal–airflow step of the lumped network (docs/model.md#coupling).
 
 Internals of :class:`dsfd.physics.model.LumpedModel`, kept in their own module so the
 model file stays readable. Everything is batched over a leading dimension B.
@@ -6,10 +6,10 @@ model file stays readable. Everything is batched over a leading dimension B.
 1. radiative conductances are linearised (secant form) at x_k and the network without
    airflow is assembled once (``L0, q0``);
 2. implicit coupling (default): the cavity temperature T that sets the air densities is
-   the fixed point of Φ(T) = x5 at the END of the step with the flows ṁ(T) (E9);
+   the fixed point of Φ(T) = x5 at the END of the step with the flows ṁ(T) (docs/model.md#coupling);
    ping-pong (paper's option): flows from x5 at the start of each sub-step;
-3. the exact ZOH gives x_{k+1} and the exact step average x̄ (E8), from which the heat
-   flows of the step follow (§12, E2).
+3. the exact ZOH gives x_{k+1} and the exact step average x̄ (docs/model.md#zoh), from which the
+   heat flows of the step follow (docs/model.md#room-heat, docs/model.md#q-air).
 """
 
 from __future__ import annotations
@@ -41,16 +41,16 @@ class StepInputs(NamedTuple):
     t_out_k, t_in_k, t_mrt_k : [K]
         Outdoor air, room air and room mean radiant temperature.
     t_rad_out_k : [K]
-        Effective exterior radiant temperature of the façade (sky and ground, §6.1).
+        Effective exterior radiant temperature of the façade (sky and ground, docs/model.md#sky).
     p_atm_pa : [Pa]
     wind_ms : [m/s]
         Local wind speed at the façade.
     cp_bottom, cp_top : [-]
         Wind pressure coefficients of the bottom and top openings.
     sources : (..., 4), [W/m2]
-        Absorbed short-wave in L1, L2, L3 and the louver (node order, errata E3).
+        Absorbed short-wave in L1, L2, L3 and the louver (node order, docs/model.md#multilayer).
     lw_exchange : (..., 3), [-]
-        Cavity long-wave exchange factors (R_14, R_12, R_42) of physics §6.2.
+        Cavity long-wave exchange factors (R_14, R_12, R_42) of docs/model.md#longwave.
     q_trans_wm2 : [W/m2]
         Solar short-wave transmitted into the room per m² façade.
     q_da_w : [W]
@@ -101,11 +101,11 @@ class StepResult(NamedTuple):
     flow : FlowState
         Mass flows (B, 4), realised regime label, cavity volume flow.
     v_cav_ms : [m/s]
-        Signed mean cavity velocity Q_cav/(D·W) (errata E12; probes read |v|).
+        Signed mean cavity velocity Q_cav/(D·W) (docs/model.md#cavity-velocity; probes read |v|).
     q_cv_rd_w, q_sol_w, q_air_w, q_da_w : [W]
-        Step-average heat flows into the room (physics §12, errata E2).
+        Step-average heat flows into the room (docs/model.md#room-heat, docs/model.md#q-air).
     heat_in_wm2 : [W/m2]
-        Net heat entering the network (energy balance of errata E18).
+        Net heat entering the network (energy balance in docs/model.md#energy-balance).
     evaluations : int
         Coupled evaluations used by the fixed point.
     converged : bool
@@ -164,7 +164,7 @@ def secant(t_a: np.ndarray, t_b: np.ndarray) -> np.ndarray:
 
 def frozen_network(nc: NetworkConstants, x: np.ndarray, inp: StepInputs,
                    theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, Boundary]:
-    """L0, q0 without airflow, radiative conductances linearised at x (§9.2, §14)."""
+    """L0, q0 without airflow, radiative conductances linearised at x (docs/model.md#network)."""
     h_out, h_in = theta[:, 0], theta[:, 5]
     # Secant radiative slopes of the pairs (x2,x3) (x1,x4) (x1,x2) (x4,x2) (x1,T_rad) (x3,T_mrt).
     # Columns are filled in place: this runs every step of every rollout, and for small
@@ -253,7 +253,7 @@ def exhaust_temperature(x5: np.ndarray, t_inflow: np.ndarray, k: np.ndarray) -> 
 
 def q_air(nc: NetworkConstants, m_dot: np.ndarray, t_exhaust: np.ndarray,
           inp: StepInputs) -> np.ndarray:
-    """Q_air of the step [W] (errata E2): a = ṁ cavity → room, b = ṁ room → cavity.
+    """Q_air of the step [W] (docs/model.md#q-air): a = ṁ cavity → room, b = ṁ room → cavity.
 
     ventilation_credit: c_p [min(a,b)(T_x − T_i) + max(0, a − b)(T_x − T_o)]
     make_up_loss:       c_p [a (T_x − T_i) + max(0, b − a)(T_o − T_i)]

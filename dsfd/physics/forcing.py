@@ -2,15 +2,17 @@
 
 Two stages, both pure and vectorised over time steps:
 
-* :func:`facade_forcing` turns measured weather at the step midpoints (errata E19.2) into
-  the façade boundary: sun position, plane-of-façade beam and diffuse irradiance (Erbs
-  decomposition where DNI/DHI are not measured, Hay–Davies or isotropic transposition,
-  physics §4; or measured plane-of-façade total and diffuse irradiance), the exterior
-  radiant temperature (sky model, §6.1), the local wind speed (power-law profile, §7.2)
-  and the wind pressure coefficients of the openings (§8.2).
+* :func:`facade_forcing` turns measured weather at the step midpoints
+  (docs/model.md#time-convention) into the façade boundary: sun position, plane-of-façade beam and
+  diffuse irradiance (Erbs decomposition where DNI/DHI are not measured, Hay–Davies or isotropic
+  transposition, docs/model.md#solar; or measured plane-of-façade total and diffuse irradiance), the
+  exterior radiant temperature (sky model, docs/model.md#sky), the local wind speed (power-law
+  profile, docs/model.md#convection) and the wind pressure coefficients of the openings
+  (docs/model.md#driving-pressures).
 * :class:`FacadeOptics` adds what depends on the louver angle φ: absorbed short-wave per
-  node (§5.4, E3), the cavity long-wave exchange factors (§6.2), the transmitted solar
-  gain and the daylighting benefit Q_DA (§12.4), for any array of louver angles at once.
+  node (docs/model.md#multilayer), the cavity long-wave exchange factors (docs/model.md#longwave),
+  the transmitted solar gain and the daylighting benefit Q_DA (docs/model.md#q-da), for any array of
+  louver angles at once.
 
 :func:`step_inputs` joins the two into the :class:`~dsfd.physics.coupling.StepInputs` the
 model steps with.
@@ -117,7 +119,7 @@ def local_wind_speed(u_met: np.ndarray, *, terrain: str, height_m: float) -> np.
     -----
     V_z = U_met (δ_met/z_met)^a_met (z/δ)^a with the met station in flat open country
     (a_met = 0.14, δ_met = 270 m, z_met = 10 m) and the site's terrain class (EnergyPlus
-    Engineering Reference, "Local Wind Speed Calculations"; physics §7.2).
+    Engineering Reference, "Local Wind Speed Calculations"; docs/model.md#convection).
     """
     a_met, d_met = TERRAIN_PROFILE["flat"]
     a, d = TERRAIN_PROFILE[terrain]
@@ -126,7 +128,8 @@ def local_wind_speed(u_met: np.ndarray, *, terrain: str, height_m: float) -> np.
 
 def facade_forcing(cfg: PanelConfig, w: WeatherInputs, *,
                    transposition: str | None = None) -> Forcing:
-    """Façade boundary conditions of every step (physics §4, §6.1, §7.2, §8.2).
+    """Façade boundary conditions of every step (docs/model.md#solar, docs/model.md#sky,
+    docs/model.md#convection, docs/model.md#driving-pressures).
 
     Parameters
     ----------
@@ -208,13 +211,13 @@ class OpticalLoads(NamedTuple):
     Attributes
     ----------
     sources : (..., n, 4), [W/m2]
-        Absorbed short-wave in L1, L2, L3, louver (node order, errata E3).
+        Absorbed short-wave in L1, L2, L3, louver (node order, docs/model.md#multilayer).
     lw_exchange : (..., n, 3), [-]
-        Cavity long-wave exchange factors R_14, R_12, R_42 (physics §6.2).
+        Cavity long-wave exchange factors R_14, R_12, R_42 (docs/model.md#longwave).
     q_trans_wm2 : (..., n), [W/m2]
         Solar short-wave transmitted into the room.
     q_da_w : (..., n), [W]
-        Daylighting benefit Q_DA (physics §12.4).
+        Daylighting benefit Q_DA (docs/model.md#q-da).
     cavity_loss : (..., n), [-]
         Flow loss K_L of the slats, referenced to the cavity velocity
         (:func:`dsfd.physics.airflow.louver_flow_loss`; 0 without a louver or with

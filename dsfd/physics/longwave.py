@@ -1,6 +1,6 @@
 """Long-wave (thermal infrared) radiation of the DSF layers.
 
-Pure functions over numpy arrays (physics.md §6, errata E19.4): sky temperature, the
+Pure functions over numpy arrays (docs/model.md#longwave, docs/model.md#sky): sky temperature, the
 effective radiant temperature seen by the exterior pane, the three-layer exchange in the
 cavity (L1 - louver - L2), and secant radiative conductances for the linear network.
 Temperatures in kelvin, heat fluxes per m² of façade.
@@ -53,9 +53,9 @@ def sky_temperature_swinbank(T_out: ArrayLike) -> FloatArray:
 
     Notes
     -----
-    ``T_sky = 0.0552 T_o^1.5`` (physics.md §6.1), equivalent to
+    ``T_sky = 0.0552 T_o^1.5`` (docs/model.md#sky), equivalent to
     ``eps_sky sigma T_o^4 = 5.31e-13 T_o^6``. About T_o - 24 K at 0 °C; clear sky only, so it
-    overstates the night loss under cloud (errata E19.4).
+    overstates the night loss under cloud (docs/model.md#sky).
     """
     return 0.0552 * np.asarray(T_out, dtype=float) ** 1.5
 
@@ -77,7 +77,7 @@ def sky_emissivity_clark_allen(T_dew: ArrayLike, opaque_sky_cover: ArrayLike) ->
 
     Notes
     -----
-    Errata E19.4 (EnergyPlus ER "Sky Radiation Model")::
+    docs/model.md#sky (EnergyPlus ER "Sky Radiation Model")::
 
         eps_sky = (0.787 + 0.764 ln(T_dp / 273)) (1 + 0.0224 N - 0.0035 N² + 0.00028 N³)
     """
@@ -127,7 +127,7 @@ def exterior_radiant_temperature(
     tilt : float, default pi/2
         Surface tilt from horizontal [rad] (façade: vertical).
     T_ground : array_like, optional
-        Ground surface temperature [K]; defaults to ``T_out`` (physics.md §6.1).
+        Ground surface temperature [K]; defaults to ``T_out`` (docs/model.md#sky).
 
     Returns
     -------
@@ -136,7 +136,7 @@ def exterior_radiant_temperature(
 
     Notes
     -----
-    EnergyPlus ER "External Longwave Radiation" (physics.md §6.1)::
+    EnergyPlus ER "External Longwave Radiation" (docs/model.md#sky)::
 
         F_sky = (1 + cos tilt) / 2,  F_gnd = (1 - cos tilt) / 2,  beta = sqrt((1 + cos tilt) / 2)
         T_rad,o^4 = F_sky beta T_sky^4 + F_sky (1 - beta) T_o^4 + F_gnd T_gnd^4
@@ -189,7 +189,7 @@ def cavity_exchange_matrix(
     Notes
     -----
     Three infinite parallel layers, glass opaque, louver grey with
-    ``rho_L = 1 - eps_L - tau_L`` (physics.md §6.2). Radiosities J_a (L1 -> louver), J_f
+    ``rho_L = 1 - eps_L - tau_L`` (docs/model.md#longwave). Radiosities J_a (L1 -> louver), J_f
     (louver -> L1), J_b (louver -> L2), J_c (L2 -> louver)::
 
         J_a - (1 - eps_1b) J_f     = eps_1b E_1
@@ -245,7 +245,7 @@ def h_rad(eps_eff: ArrayLike, T_a: ArrayLike, T_b: ArrayLike) -> FloatArray:
 def h_rad_gap(eps_a: ArrayLike, eps_b: ArrayLike, T_a: ArrayLike, T_b: ArrayLike) -> FloatArray:
     """Radiative conductance across a closed gap of two opaque panes, e.g. h_r,23 [W/(m2 K)].
 
-    physics.md §6.3: ``sigma (T_a² + T_b²)(T_a + T_b) / (1/eps_a + 1/eps_b - 1)``; about
+    docs/model.md#longwave: ``sigma (T_a² + T_b²)(T_a + T_b) / (1/eps_a + 1/eps_b - 1)``; about
     0.56 for the DGU (eps 0.84 / 0.10) at 20 °C.
     """
     return h_rad(parallel_plates_emissivity(eps_a, eps_b), T_a, T_b)
@@ -254,7 +254,7 @@ def h_rad_gap(eps_a: ArrayLike, eps_b: ArrayLike, T_a: ArrayLike, T_b: ArrayLike
 def h_rad_room(eps_surface: ArrayLike, T_surface: ArrayLike, T_mrt: ArrayLike) -> FloatArray:
     """Radiative conductance from the room-side pane to the room, h_r,in [W/(m2 K)].
 
-    physics.md §6.4: ``eps sigma (T3² + T_mrt²)(T3 + T_mrt)`` (room as a black enclosure);
+    docs/model.md#longwave: ``eps sigma (T3² + T_mrt²)(T3 + T_mrt)`` (room as a black enclosure);
     about 4.8 for eps = 0.84 at 20 °C.
     """
     return h_rad(eps_surface, T_surface, T_mrt)
@@ -284,7 +284,7 @@ def cavity_conductances(
     -------
     CavityConductances
         ``g_14 = R_14 sigma (T1² + T4²)(T1 + T4)`` and likewise ``g_12``, ``g_42``
-        (physics.md §6.2), so that ``g (T_i - T_j)`` is the exact net exchange.
+        (docs/model.md#longwave), so that ``g (T_i - T_j)`` is the exact net exchange.
     """
     exchange = np.asarray(exchange, dtype=float)
     return CavityConductances(

@@ -3,7 +3,7 @@
 :class:`LumpedModel` is the public face of the physics: one coupled step for a batch of
 states, a horizon rollout for a batch of control sequences (what the optimiser and the
 calibrator call thousands of times), and the steady state used as initial condition
-(errata E19.1). The step itself lives in :mod:`dsfd.physics.coupling`; the exogenous
+(docs/model.md#initial-state). The step itself lives in :mod:`dsfd.physics.coupling`; the exogenous
 inputs (weather, sun, optics) are built by :mod:`dsfd.physics.forcing`.
 
 States are x1..x6 [K] (L1, L2, L3, louver, cavity air, DGU gap gas); parameters
@@ -71,7 +71,8 @@ class Trajectory(NamedTuple):
 
 
 def network_constants(cfg: PanelConfig) -> NetworkConstants:
-    """Heat capacities, emissivities and coupling options of a panel (physics §2, §9)."""
+    """Heat capacities, emissivities and coupling options of a panel (docs/model.md#constants,
+    docs/model.md#network)."""
     gl = cfg.glazing
     mo = cfg.model
     rho_a, cp_a = mo.air_density_kgm3, mo.air_heat_capacity_jkgk
@@ -276,7 +277,8 @@ class LumpedModel:
     def steady_state(self, regime: np.ndarray, or_: np.ndarray, inputs: StepInputs,
                      theta: np.ndarray, *, iterations: int = 50, tol_k: float = 1e-5,
                      x_guess: np.ndarray | None = None) -> np.ndarray:
-        """Steady state x* = −L⁻¹q for constant inputs (errata E19.1 initial condition).
+        """Steady state x* = −L⁻¹q for constant inputs (initial condition,
+        docs/model.md#initial-state).
 
         Outer iterations refresh the linearised radiative conductances at the current
         state; inside each, the cavity temperature that sets the airflow is solved as the

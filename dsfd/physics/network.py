@@ -1,4 +1,4 @@
-"""The six-node thermal network of the façade and its state-space assembly (physics §9).
+"""The six-node thermal network of the façade and its state-space assembly (docs/model.md#network).
 
 Nodes (0-based index → paper state): 0 → x1 exterior pane L1, 1 → x2 DGU outer pane L2,
 2 → x3 DGU inner pane L3, 3 → x4 louver, 4 → x5 cavity air, 5 → x6 DGU gap gas.
@@ -66,7 +66,7 @@ class Boundary(NamedTuple):
 
 def assemble(conductance: np.ndarray, bnd: Boundary,
              sources: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Build L and q of C ẋ = L x + q (physics §9.2).
+    """Build L and q of C ẋ = L x + q (docs/model.md#network).
 
     Parameters
     ----------
@@ -74,7 +74,7 @@ def assemble(conductance: np.ndarray, bnd: Boundary,
         Internal link conductances in the order of :data:`LINKS`.
     bnd : Boundary
     sources : array (..., 4), [W/m2]
-        Absorbed short-wave S1 (L1), S2 (L2), S3 (L3), S4 (louver) (errata E3).
+        Absorbed short-wave S1 (L1), S2 (L2), S3 (L3), S4 (louver) (docs/model.md#multilayer).
 
     Returns
     -------
@@ -100,7 +100,7 @@ def boundary_heat_in(x_mean: np.ndarray, bnd: Boundary, sources: np.ndarray) -> 
     """Net heat entering the network over a step at the mean state [W/m2].
 
     Σ(boundary links into the nodes) + absorbed short-wave: the right-hand side of the
-    energy balance of errata E18 (ΔU = ∫ this dt for the exact ZOH).
+    energy balance in docs/model.md#energy-balance (ΔU = ∫ this dt for the exact ZOH).
     """
     return (
         bnd.h_out * (bnd.t_out - x_mean[..., X1])

@@ -1,9 +1,9 @@
-"""The one-node cavity: all four openings open (regime 9, physics §8.4.4, errata E13).
+"""The one-node cavity: all four openings open (regime 9, docs/model.md#one-node).
 
 With every damper open the cavity pressure P_c is the unknown of one mass balance,
 Σ_k ṁ_k(P_c) = 0, each opening an orifice (square-root law, regularised near zero flow:
-errata E10). Σṁ is strictly decreasing in P_c, so the root is unique. The coupling of the
-thermal model re-solves it at every evaluation of the cavity temperature, so the solver
+docs/model.md#regularisation). Σṁ is strictly decreasing in P_c, so the root is unique. The coupling
+of the thermal model re-solves it at every evaluation of the cavity temperature, so the solver
 is built for warm starts: from a start predicted along the solution's sensitivities it
 takes plain Newton steps, and stops at a Newton point it has not evaluated when the
 residual there is provably below the tolerance; anything else goes to Newton's method
@@ -78,7 +78,7 @@ def one_node_flows(
     p_c_start: np.ndarray | None = None,
     scalar_max_rows: int = SCALAR_MAX_ROWS,
 ) -> OneNodeFlow:
-    """General one-node cavity flow solver (physics §8.4.4).
+    """General one-node cavity flow solver (docs/model.md#one-node).
 
     Solves Σ_k ṁ_k(P_c) = 0 for the cavity pressure P_c at z = 0, where
     ṁ_k = reg(Δp_k; C_k = sqrt(2 ρ_up,k / K_k)), Δp_k = p_B,k − (P_c − ρ_c g z_k),

@@ -1,11 +1,11 @@
 """Solar (or visible) sources of the DSF layers by the multilayer net-radiation method.
 
-This module holds the multilayer balance of physics.md §5.4 (with errata E3) and re-exports
+This module holds the multilayer balance of docs/model.md#multilayer and re-exports
 the layer optics of :mod:`dsfd.physics.optics_glass` and :mod:`dsfd.physics.optics_louver`,
 so that ``from dsfd.physics.optics import ...`` reaches the whole short-wave API.
 
 Layers, outdoors to room: L1 (exterior pane) -> louver -> L2 -> L3 (the DGU). Node numbers of
-the thermal network (errata E3): 1 = L1, 2 = L2, 3 = L3, 4 = louver.
+the thermal network (docs/model.md#multilayer): 1 = L1, 2 = L2, 3 = L3, 4 = louver.
 
 Band: the functions are band-agnostic. For the daylight proxy call them with the visible
 glass data and a visible :class:`LouverOptics`.
@@ -114,8 +114,8 @@ def _glass_diffuse(
 ) -> tuple[GlassAngular, GlassAngular, GlassAngular, FloatArray]:
     """Hemispherical properties of L1, L2, L3 and the glass-only part of the 6x6 system."""
     h1, h2, h3 = (glass_hemispherical(*triple) for triple in glass)
-    # Unknowns (F1, F2, F3, B1, B2, B3); rows F1, F2, F3, B1, B2, B3 of §5.4. The louver
-    # entries (rows F2 and B1) are added per slat angle.
+    # Unknowns (F1, F2, F3, B1, B2, B3); rows F1, F2, F3, B1, B2, B3 of docs/model.md#multilayer.
+    # The louver entries (rows F2 and B1) are added per slat angle.
     system = np.eye(6)
     system[0, 3] = -h1.R_b  # F1 = tau_1 F0 + rho^b_1 B1
     system[2, 1] = -h2.T  # F3 = tau_2 F2 + rho^b_2 B3
@@ -159,24 +159,26 @@ def layer_absorption(
         The louver in the same band; ``None`` means :data:`NO_LOUVER`.
     diffuse_ground : array_like, optional
         Ground-reflected part of ``diffuse`` [W/m2]. When given, the outdoor diffuse that
-        L1 transmits reaches the louver with the sky / ground properties of §5.3.5 instead of
-        the uniform-diffuse ones (truth plant; 128 extra beam evaluations per slat angle).
+        L1 transmits reaches the louver with the sky / ground properties of docs/model.md#slat-cell
+        instead of the uniform-diffuse ones (truth plant; 128 extra beam evaluations per slat
+        angle).
 
     Returns
     -------
     LayerSources
         ``s1, s2, s3, s4, transmitted, transmitted_beam, reflected`` [W/m2], node-numbered
-        per errata E3, each of the broadcast shape of all array inputs. Time-step inputs of
-        shape ``(n_steps,)`` with ``phi`` of shape ``(n_phi, 1)`` give ``(n_phi, n_steps)``.
+        per docs/model.md#multilayer, each of the broadcast shape of all array inputs. Time-step
+        inputs of shape ``(n_steps,)`` with ``phi`` of shape ``(n_phi, 1)`` give
+        ``(n_phi, n_steps)``.
 
     Notes
     -----
-    physics.md §5.4 with errata E3. Beam, with θ the angle of incidence::
+    docs/model.md#multilayer. Beam, with θ the angle of incidence::
 
         b1 = T_1(θ) I_b                       (beam in gap 1)
         b2 = tau_bb(phi, phi_s) b1            (beam in gap 2)
         S1_b = A_1,f(θ) I_b,  S4_b = alpha_b b1,  S2_b = A_2(θ) b2,  S3_b = A_3(θ) b2
-        transmitted_beam = T_DGU(θ) b2        (§5.2)
+        transmitted_beam = T_DGU(θ) b2        (docs/model.md#glass-optics)
 
     The louver turns ``tau_bd b1`` into inward diffuse in gap 2 and ``rho_bd b1`` into outward
     diffuse in gap 1; the DGU returns ``R_DGU,f(θ) b2`` into gap 2 as diffuse. Diffuse
@@ -188,11 +190,11 @@ def layer_absorption(
 
     (no short-wave from the room): a 6 x 6 linear system whose matrix depends on the slat
     angle only, inverted once per angle (batched ``np.linalg.inv``) and applied to every time
-    step. Glass uses hemispherical properties (§5.1), the louver ``tau_dd, rho_dd`` at ``phi``
-    for the front and at ``-phi`` for the back. Absorbed diffuse
+    step. Glass uses hemispherical properties (docs/model.md#glass-optics), the louver
+    ``tau_dd, rho_dd`` at ``phi`` for the front and at ``-phi`` for the back. Absorbed diffuse
     ``S_j,d = alpha^f_j F_{j-1} + alpha^b_j B_j``; ``transmitted = transmitted_beam +
     tau_4 F_3``; ``reflected = R_1,f(θ) I_b + rho^f_1 I_d + tau_1 B_1``. Layer -> node
-    (errata E3)::
+    (docs/model.md#multilayer)::
 
         s1 = S1_b + S_{j=1},d     s2 = A_2 b2 + S_{j=3},d
         s3 = A_3 b2 + S_{j=4},d   s4 = alpha_b b1 + S_{j=2},d

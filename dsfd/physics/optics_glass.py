@@ -1,6 +1,6 @@
 """Angular and hemispherical solar properties of glass panes and of the interior DGU.
 
-Pure functions over numpy arrays (physics.md §5.1–5.2). "Front" faces outdoors. All
+Pure functions over numpy arrays (docs/model.md#glass-optics). "Front" faces outdoors. All
 properties are dimensionless fractions of the incident power; angles are given as
 ``cos_aoi``, the cosine of the angle of incidence on the pane [-].
 
@@ -93,7 +93,7 @@ def glass_angular(
 
     Notes
     -----
-    EnergyPlus ER "Angular Properties for Coated Glass" (physics.md §5.1), c = cos θ::
+    EnergyPlus ER "Angular Properties for Coated Glass" (docs/model.md#glass-optics), c = cos θ::
 
         tau(c) = sum_i t_i c^i,   rho(c) = sum_i r_i c^i - tau(c)
         T(θ)   = T(0) tau(c)
@@ -141,7 +141,7 @@ def glass_hemispherical(T0: ArrayLike, R_f0: ArrayLike, R_b0: ArrayLike) -> Glas
 
     Notes
     -----
-    physics.md §5.1: ``P_dif = 2 ∫_0^{pi/2} P(θ) cos θ sin θ dθ`` on the nodes
+    docs/model.md#glass-optics: ``P_dif = 2 ∫_0^{pi/2} P(θ) cos θ sin θ dθ`` on the nodes
     0°, 10°, …, 90°. Nine intervals do not suit plain Simpson, so composite Simpson 1/3
     (0–60°) is joined to Simpson 3/8 (60–90°); the weights are normalised to integrate
     sin 2θ exactly (a 1.1e-4 correction). Each property is integrated separately, and the
@@ -170,7 +170,7 @@ def dgu_beam(outer: GlassAngular, inner: GlassAngular) -> DGUBeam:
 
     Notes
     -----
-    Net radiation for two specular layers (physics.md §5.2), k = 1 / (1 - R_a,b R_b,f)
+    Net radiation for two specular layers (docs/model.md#glass-optics), k = 1 / (1 - R_a,b R_b,f)
     sums the inter-reflections in the gap::
 
         T_DGU   = T_a T_b k

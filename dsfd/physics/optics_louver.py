@@ -1,13 +1,13 @@
 """Short-wave and long-wave properties of a venetian louver by the slat-cell method.
 
 The louver is reduced to one periodic cell: two adjacent flat slats and two black, non-emitting
-*fictitious* apertures spanning their tips (physics.md §5.3). Radiosity inside the cell is
+*fictitious* apertures spanning their tips (docs/model.md#slat-cell). Radiosity inside the cell is
 solved with Hottel crossed-string view factors (:mod:`dsfd.physics.optics_slat_cell`); the
 cell gives the layer properties that the multilayer balance (:mod:`dsfd.physics.optics`) and
 the cavity long-wave exchange (:mod:`dsfd.physics.longwave`) use.
 
-Conventions (physics.md §1, §5.3.1)
------------------------------------
+Conventions (docs/model.md#conventions, docs/model.md#slat-cell)
+----------------------------------------------------------------
 * ``phi`` [rad] is the slat angle: 0 horizontal, positive when the slat tip nearest the
   exterior glazing is raised (``phi = theta_E+ - pi/2`` with the EnergyPlus slat angle).
   Domain [-pi/2, pi/2]; the closed positions ±pi/2 are handled exactly.
@@ -108,7 +108,7 @@ class SlatSkyGround(NamedTuple):
 def _edge_fraction_beam(
     phi: FloatArray, profile: FloatArray, pitch: float, thickness: float
 ) -> FloatArray:
-    # Projected height of the edge face facing the ray, per slat pitch (physics §5.3.7).
+    # Projected height of the edge face facing the ray, per slat pitch (docs/model.md#slat-cell).
     edge = thickness * np.abs(np.cos(phi - profile)) / (pitch * np.cos(profile))
     return np.minimum(edge, 1.0)
 
@@ -159,7 +159,7 @@ def slat_beam(
 
     Notes
     -----
-    physics.md §5.3.3–5.3.4. Powers per unit slat length, normalised by the aperture power:
+    docs/model.md#slat-cell. Powers per unit slat length, normalised by the aperture power:
     the beam first strikes segment k with fraction f_k (:func:`slat_cell_hit_fractions`),
     ``tau_bb = f_inner``. The reflected powers R of the 2M slat segments satisfy
 
@@ -169,9 +169,9 @@ def slat_beam(
     ``alpha_b = sum_k (1 - rho_k) G_k`` with ``G = f + F_ss^T R``. The linear functionals
     are evaluated through the adjoint system (one batched ``np.linalg.solve`` per phi).
 
-    Edge correction (§5.3.7, EnergyPlus ER "Window Blinds"): the edge face of thickness t
-    intercepts ``f_e = min(1, t |cos(phi - phi_s)| / (s cos phi_s))`` of the beam and reflects
-    it outwards with the mean slat reflectance rho_e; then ``tau -> tau (1 - f_e)``,
+    Edge correction (docs/model.md#slat-cell, EnergyPlus ER "Window Blinds"): the edge face of
+    thickness t intercepts ``f_e = min(1, t |cos(phi - phi_s)| / (s cos phi_s))`` of the beam and
+    reflects it outwards with the mean slat reflectance rho_e; then ``tau -> tau (1 - f_e)``,
     ``rho_bd -> rho_bd (1 - f_e) + f_e rho_e``, ``alpha_b -> alpha_b (1 - f_e) + f_e (1 - rho_e)``.
     """
     phi = np.asarray(phi, dtype=float)
@@ -220,15 +220,15 @@ def slat_diffuse(
 
     Notes
     -----
-    physics.md §5.3.4: the outer aperture emits the incident diffuse power uniformly
+    docs/model.md#slat-cell: the outer aperture emits the incident diffuse power uniformly
     (R_0 = s), so the first-strike fractions are the view factors F_0k and
 
         tau_dd = F_01 + sum_j R_j F_j1,   rho_dd = sum_j R_j F_j0,
         alpha_d = sum_k (1 - rho_k) G_k.
 
     ``tau_dd`` is even in phi (reciprocity); ``rho_dd`` and ``alpha_d`` are even only for
-    equal face reflectances. Edge correction (§5.3.7): the unclipped beam edge fraction
-    averaged over the 2-D Lambertian aperture, ``(1/2) ∫ f_e cos(phi_s) dphi_s`` over
+    equal face reflectances. Edge correction (docs/model.md#slat-cell): the unclipped beam edge
+    fraction averaged over the 2-D Lambertian aperture, ``(1/2) ∫ f_e cos(phi_s) dphi_s`` over
     [-pi/2, pi/2], equals ``t / s`` for every phi.
     """
     phi = np.asarray(phi, dtype=float)
@@ -275,7 +275,7 @@ def slat_infrared(
 
     Notes
     -----
-    physics.md §5.3.4: the diffuse case with rho_k = 1 - eps_slat and slat IR transmittance 0
+    docs/model.md#slat-cell: the diffuse case with rho_k = 1 - eps_slat and slat IR transmittance 0
     (EnergyPlus ER: the diffuse-to-diffuse calculation is repeated for the IR band);
     ``eps_L = alpha_d``, ``tau_L = tau_dd``, ``rho_L = rho_dd``.
     """
@@ -324,7 +324,7 @@ def slat_sky_ground(
 
     Notes
     -----
-    physics.md §5.3.5 (EnergyPlus ER "Window Blinds")::
+    docs/model.md#slat-cell (EnergyPlus ER "Window Blinds")::
 
         tau_sky = ∫_0^{pi/2} [tau_bb + tau_bd](phi, phi_s) cos(phi_s) dphi_s
         tau_gnd = the same over phi_s in [-pi/2, 0]

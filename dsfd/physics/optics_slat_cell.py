@@ -1,11 +1,12 @@
 """Slat-cell geometry, crossed-string view factors, beam hit fractions and radiosity response.
 
-The core of the louver optics of physics.md §5.3.1–5.3.4; the layer properties built on it
+The core of the louver optics of docs/model.md#slat-cell; the layer properties built on it
 are in :mod:`dsfd.physics.optics_louver`. Angle conventions are documented there:
 ``phi`` slat angle [rad] (0 horizontal, + when the outdoor-side tip is raised),
 ``profile`` profile angle of a ray entering from outdoors [rad] (+ descending).
 
-Cell (§5.3.1), with c_w = (w/2) cos phi, a_w = (w/2) sin phi and slat centres on x = 0::
+Cell (docs/model.md#slat-cell), with c_w = (w/2) cos phi, a_w = (w/2) sin phi and slat centres on
+x = 0::
 
     lower slat: outer tip Lo = (-c_w, a_w)       inner tip Li = (c_w, -a_w)
     upper slat: outer tip Uo = (-c_w, s + a_w)   inner tip Ui = (c_w, s - a_w)
@@ -142,7 +143,7 @@ def _solve_response(
     view = crossed_strings(cell)
     rho = np.repeat([rho_upper, rho_lower], segments)  # the lower slat shows its upper face
     f_ss = view[..., 2:, 2:]
-    # Radiosity of slat segments for first-strike powers P (§5.3.4):
+    # Radiosity of slat segments for first-strike powers P (docs/model.md#slat-cell):
     #   R = rho * (P + F_ss^T R)  =>  R = (I - diag(rho) F_ss^T)^-1 diag(rho) P.
     # Every output is a linear functional c.R, so solve the adjoint system once per phi:
     #   c.R = (rho * Y)^T P   with   (I - F_ss diag(rho)) Y = c,
@@ -213,7 +214,7 @@ def slat_cell_view_factors(
     Notes
     -----
     Hottel's crossed strings for segments i = AB and j = CD of a convex enclosure
-    (physics.md §5.3.2)::
+    (docs/model.md#slat-cell)::
 
         F_ij = |(|AC| + |BD|) - (|AD| + |BC|)| / (2 |AB|),   F_ii = 0
 
@@ -246,8 +247,8 @@ def slat_cell_hit_fractions(
 
     Notes
     -----
-    physics.md §5.3.3: with ray direction d = (cos phi_s, -sin phi_s), the end points P of every
-    exit-side segment are projected back onto the aperture line,
+    docs/model.md#slat-cell: with ray direction d = (cos phi_s, -sin phi_s), the end points P of
+    every exit-side segment are projected back onto the aperture line,
     ``z_ap(P) = P_z + (P_x + c_w) tan phi_s``, and the interval is clipped to the aperture
     ``[a_w, s + a_w]``.
     """
@@ -276,7 +277,7 @@ def direct_transmittance(
 
     Notes
     -----
-    physics.md §5.3.3 (EnergyPlus ER "Window Blinds", in this document's angle convention)::
+    docs/model.md#slat-cell (EnergyPlus ER "Window Blinds", in this document's angle convention)::
 
         tau_bb = max(0, 1 - (w/s) |sin(phi_s - phi)| / cos(phi_s))
 

@@ -1,6 +1,6 @@
 """The ten airflow regimes: damper sets, realised labels and the per-step flow problem.
 
-Physics §8.3 with errata E1 (regimes 5–8 renumbered: 5 is exhaust room → IB ↑ → ET → out).
+docs/model.md#regimes (regimes 5–8 renumbered: 5 is exhaust room → IB ↑ → ET → out).
 A :class:`FlowSetup` holds everything about a batch's flow problem that does not depend on
 the cavity temperature, so the thermal–airflow fixed point only re-evaluates
 :func:`path_flows`. Mass flows are positive INTO the cavity; openings EB, ET, IB, IT.
@@ -216,11 +216,12 @@ def path_flows(setup: FlowSetup, t5_k: np.ndarray, geom: AirflowGeometry) -> Pat
 
     Notes
     -----
-    Two-opening paths: ΔP = p_B,in − p_B,out + ρ_c g (z_in − z_out) (errata E1, E5);
-    regimes 1–4 use the orifice closed form ṁ = sgn(ΔP) sqrt(2|ΔP|/(K_in/ρ_in + K_out/ρ_c))
-    (E4), regimes 5–8 the power law Q = c·OR·sgn(ΔP)|ΔP|^n with ṁ = ρ_up Q [PARK], both
-    regularised below Δp_t (E10). Regime 9: the one-node solver with four orifices
-    (§8.4.4, E13 [ENG]); regime 10: no flow.
+    Two-opening paths: ΔP = p_B,in − p_B,out + ρ_c g (z_in − z_out) (docs/model.md#regimes,
+    docs/model.md#plant-airflow); regimes 1–4 use the orifice closed form ṁ = sgn(ΔP)
+    sqrt(2|ΔP|/(K_in/ρ_in + K_out/ρ_c)) (docs/model.md#path-flows), regimes 5–8 the power law
+    Q = c·OR·sgn(ΔP)|ΔP|^n with ṁ = ρ_up Q [PARK], both regularised below Δp_t
+    (docs/model.md#regularisation). Regime 9: the one-node solver with four orifices
+    (docs/model.md#one-node [ENG]); regime 10: no flow.
     """
     s = setup
     rho_c = s.p_atm / (R_AIR * t5_k)
@@ -309,7 +310,7 @@ def regime_flows(
     Parameters
     ----------
     regime : int array (B,)
-        Commanded airflow regime 1..10 (selects the damper set; physics §8.3 with E1).
+        Commanded airflow regime 1..10 (selects the damper set; docs/model.md#regimes).
     or_ : array (B,), [-]
         Damper opening ratio 0..1.
     t5_k : array (B,), [K]

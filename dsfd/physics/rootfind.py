@@ -1,4 +1,4 @@
-"""Vectorised scalar fixed-point solver for the thermal–airflow coupling (physics §11, E9).
+"""Vectorised scalar fixed-point solver for the thermal–airflow coupling (docs/model.md#coupling).
 
 Solves T = Φ(T) independently for every element of a batch, i.e. finds a root of
 h(T) = Φ(T) − T. Φ is bounded (flows are bounded), so h → +∞ as T → −∞ and h → −∞ as
@@ -11,7 +11,7 @@ root is bracketed a step must move in the direction of the sign of h and is limi
 ``max_step``; once a sign change is seen, the secant step is accepted only if it falls
 between the latest point and the bracket midpoint, otherwise the bracket is bisected
 (Dekker's method). The latest iterate is always the returned one, so callers can keep
-per-evaluation side results. Uniqueness of the root is not guaranteed (errata E9); the
+per-evaluation side results. Uniqueness of the root is not guaranteed (docs/model.md#coupling); the
 one bracketed is returned.
 
 Reference: T. J. Dekker, "Finding a zero by means of successive linear interpolation",

@@ -1,4 +1,4 @@
-"""Exact zero-order-hold discretisation of ẋ = A x + b (physics §10, errata E8).
+"""Exact zero-order-hold discretisation of ẋ = A x + b (docs/model.md#zoh).
 
 The node network is C ẋ = L x + q with C diagonal positive (heat capacities) and L
 symmetric negative definite (a weighted graph Laplacian plus boundary conductances), so
@@ -82,7 +82,7 @@ def modal_state(m: Modal, x0: np.ndarray, dt: float, *, node: int | None = None)
 
 
 def modal_step(m: Modal, x0: np.ndarray, dt: float) -> ZohStep:
-    """Exact ZOH step from ``x0``: end state and exact step average (errata E8)."""
+    """Exact ZOH step from ``x0``: end state and exact step average (docs/model.md#zoh)."""
     y0 = (((x0 - m.x_steady) / m.r)[..., None, :] @ m.vec)[..., 0, :]
     z = m.lam * dt
     both = np.stack([np.exp(z) * y0, np.expm1(z) / z * y0], axis=-1)  # (..., n, 2)
@@ -112,17 +112,17 @@ def zoh_symmetric(lap: np.ndarray, q: np.ndarray, cap: np.ndarray, x0: np.ndarra
     Returns
     -------
     ZohStep
-        ``x_next`` at t + T, exact step average ``x_mean`` (errata E8) and the frozen
+        ``x_next`` at t + T, exact step average ``x_mean`` (docs/model.md#zoh) and the frozen
         steady state ``x_steady``.
     """
     return modal_step(modal(lap, q, cap), x0, dt)
 
 
 def zoh_vanloan(a: np.ndarray, b: np.ndarray, x0: np.ndarray, dt: float) -> ZohStep:
-    """Reference exact step via the augmented matrix exponential (physics §10).
+    """Reference exact step via the augmented matrix exponential (docs/model.md#zoh).
 
     M = [[A, b], [0, 0]], E = expm(M T): G = E[:n, :n], H = E[:n, n]; the step average is
-    A⁻¹((x_{k+1} − x_k)/T − b) (errata E8). Batched over leading dimensions.
+    A⁻¹((x_{k+1} − x_k)/T − b) (docs/model.md#zoh). Batched over leading dimensions.
     """
     n = a.shape[-1]
     batch = np.broadcast_shapes(a.shape[:-2], b.shape[:-1], x0.shape[:-1])
@@ -140,7 +140,7 @@ def step_integral_vanloan(a: np.ndarray, b: np.ndarray, x0: np.ndarray, dt: floa
     """∫₀ᵀ x dt by the 14×14 Van Loan form (for a 6-state system); reference for tests.
 
     N = [[M, I], [0, 0]] with M = [[A, b], [0, 0]]; F = expm(N T); ∫ z dt = F[:7, 7:] z_k with
-    z = [x; 1] (physics §10; the block is the integral, divide by T for the average).
+    z = [x; 1] (docs/model.md#zoh; the block is the integral, divide by T for the average).
     """
     n = a.shape[-1]
     k = n + 1

@@ -23,8 +23,8 @@ Calibration: ``online`` (the daemon's on-line self-calibration), ``offline`` (θ
 ``dsfd calibrate`` parameter file, frozen) or ``none`` (the panel's defaults, frozen).
 
 Energy is the plant's own room-side heat (:meth:`~dsfd.sim.plant.plant.Plant.room_heat_j`,
-integrated inside its ODE), cycle by cycle; J follows physics §12.5 with the mode the cycle
-decided in (heating: J = −ΣQ; cooling: J = Σ(Q_cv,rd + Q_sol + Q_air − Q_DA)).
+integrated inside its ODE), cycle by cycle; J follows docs/model.md#control-objective with the mode
+the cycle decided in (heating: J = −ΣQ; cooling: J = Σ(Q_cv,rd + Q_sol + Q_air − Q_DA)).
 """
 
 from __future__ import annotations
@@ -147,7 +147,8 @@ class ClosedLoopResult:
         return len(self.commands)
 
     def j_per_cycle(self) -> np.ndarray:
-        """Objective of each cycle's interval [J] (physics §12.5, the cycle's mode)."""
+        """Objective of each cycle's interval [J] (docs/model.md#control-objective, the cycle's
+        mode)."""
         q = self.heat_j
         gains = q["q_cv_rd"] + q["q_sol_trans"] + q["q_air"]
         return np.where(self.heating, -(gains + q["q_da"]), gains - q["q_da"])

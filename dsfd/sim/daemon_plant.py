@@ -32,8 +32,8 @@ DEFAULT_WEATHER = "rmis-golden-2022-01"
 
 
 def plant_options(fidelity: str) -> PlantOptions:
-    """``full``: the stratified truth plant (physics §15); ``lumped``: the same plant with
-    the lumped model's switches (one segment, lumped optics and flows) but realistic sensors
+    """``full``: the stratified truth plant (docs/model.md#truth-plant); ``lumped``: the same plant
+    with the lumped model's switches (one segment, lumped optics and flows) but realistic sensors
     and actuators — much faster, for quick dry runs and tests of the daemon itself."""
     if fidelity == "full":
         return PlantOptions()

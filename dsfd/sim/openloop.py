@@ -1,7 +1,7 @@
 """Open-loop runs of the lumped model on replayed weather (``dsfd simulate``).
 
 Fixed controls, the whole weather window, the steady state of the first step as initial
-condition (errata E19.1), and a summary in engineering units.
+condition (docs/model.md#initial-state), and a summary in engineering units.
 """
 
 from __future__ import annotations

@@ -1,7 +1,8 @@
 """Weather at the edge: file readers, the :class:`WeatherSeries` container and its time axis.
 
 Readers return UTC interval midpoints; :func:`resample` gives model-step midpoints
-(errata E19.2); :func:`shift_to_site` replays foreign weather at the same local solar time.
+(docs/model.md#time-convention); :func:`shift_to_site` replays foreign weather at the same local
+solar time.
 """
 
 from dsfd.weather.daily import read_kma_daily

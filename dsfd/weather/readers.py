@@ -1,7 +1,7 @@
 """Readers for measured and typical-year weather files into :class:`WeatherSeries`.
 
-Every reader returns UTC times at the interval MIDPOINT of interval means (E19.2) and
-applies the same clean-up (documented once here):
+Every reader returns UTC times at the interval MIDPOINT of interval means
+(docs/model.md#time-convention) and applies the same clean-up (documented once here):
 
 * missing-value codes and bad QC flags become NaN;
 * runs of at most :data:`~dsfd.weather.series.MAX_FILL_SAMPLES` consecutive missing samples

@@ -3,7 +3,7 @@
 A :class:`WeatherSeries` holds one value per channel at each instant ``time_s`` (UTC unix
 seconds). Logger values are interval means; the readers stamp them at the interval
 MIDPOINT, so a value and the sun position computed at ``time_s`` belong together.
-:func:`resample` evaluates a series at model-step midpoints (errata E19.2) and
+:func:`resample` evaluates a series at model-step midpoints (docs/model.md#time-convention) and
 :func:`shift_to_site` replays foreign weather at the same local solar time elsewhere.
 """
 
@@ -173,7 +173,7 @@ def resample(
     """Evaluate a series at the midpoints of equal model steps.
 
     Step k covers [start_s + k·step_s, start_s + (k+1)·step_s] and is represented by its
-    midpoint ``start_s + (k + 0.5)·step_s`` (errata E19.2).
+    midpoint ``start_s + (k + 0.5)·step_s`` (docs/model.md#time-convention).
 
     Parameters
     ----------

@@ -27,7 +27,7 @@ def test_suwon_panel_holds_the_paper_unit(suwon):
     assert suwon.louver.slat_width_m == 0.05
     assert suwon.louver.angles_deg() == tuple(float(a) for a in range(-90, 91, 18))
     assert suwon.openings.available_regimes() == tuple(range(1, 11))
-    assert suwon.parameters.f.upper == 1e4  # errata E11
+    assert suwon.parameters.f.upper == 1e4  # docs/model.md#parameters
 
 
 def test_panel_without_louver_is_expressible():

@@ -1,4 +1,5 @@
-"""Airflow: closed forms vs the one-node solver, regimes, reversal, magnitudes (physics §8)."""
+"""Airflow: closed forms vs the one-node solver, regimes, reversal, magnitudes
+(docs/model.md#airflow)."""
 
 from __future__ import annotations
 
@@ -37,7 +38,8 @@ def _bnd(t_out_c, t_in_c, wind, cp_b, cp_t, n=None):
 
 
 def test_one_node_solver_equals_corrected_closed_form(geom):
-    """Errata E4: with two open orifices the one-node solver reproduces the closed form."""
+    """docs/model.md#path-flows: with two open orifices the one-node solver reproduces the closed
+    form."""
     rng = np.random.default_rng(1)
     n = 400
     t_out = rng.uniform(-15, 35, n)
@@ -221,7 +223,8 @@ def test_inside_circulation_reverses_with_stack_pressure(geom, regime):
 
 
 def test_outside_circulation_reverses_with_wind(geom):
-    """Regime 3 at T5 = T_o: only the wind pressure difference drives the flow (E19.5)."""
+    """Regime 3 at T5 = T_o: only the wind pressure difference drives the flow
+    (docs/model.md#departures)."""
     t5 = np.full(3, 5.0 + 273.15)
     bnd = _bnd(np.full(3, 5.0), np.full(3, 22.0), np.array([4.0, 4.0, 0.0]),
                np.array([0.6, 0.1, 0.6]), np.array([0.1, 0.6, 0.1]))
@@ -244,14 +247,14 @@ def test_diagonal_numbering_follows_errata_e1(geom):
     sup = regime_flows(np.array([5]), 1.0, np.array([298.15]), bnd, geom_n, f=100.0, c=0.05,
                        n=0.6)
     assert sup.label[0] == 8 and sup.m_dot[0, ET] > 0
-    # Power law: Q = c·OR·|ΔP|^n exactly (ΔP_5 from errata E1, well above Δp_t).
+    # Power law: Q = c·OR·|ΔP|^n exactly (ΔP_5 from docs/model.md#regimes, well above Δp_t).
     rho_o, rho_c, rho_i = (air_density(t, 101325.0) for t in (273.15, 298.15, 295.15))
     dp5 = 5.0 + (rho_o - rho_c) * GRAVITY * geom.stack_height_m
     np.testing.assert_allclose(ex.m_dot[0, IB], rho_i * 0.05 * dp5**0.6, rtol=1e-12)
 
 
 def test_regularisation_is_smooth_and_monotone():
-    """Errata E10: value and slope continuous at Δp_t; monotone through zero."""
+    """docs/model.md#regularisation: value and slope continuous at Δp_t; monotone through zero."""
     dp_t = 0.01
     for m in (0.5, 0.6, 0.65, 1.0):
         eps = 1e-9
@@ -268,7 +271,8 @@ def test_regularisation_is_smooth_and_monotone():
 
 
 def test_orifice_only_magnitude_errata_e11():
-    """E11: f = 0, C_d = 0.6, A_d = A_c = 0.5 m², ΔT = 10 K ⇒ ΔP ≈ 1.06 Pa, v ≈ 0.56 m/s."""
+    """docs/model.md#parameters: f = 0, C_d = 0.6, A_d = A_c = 0.5 m², ΔT = 10 K ⇒ ΔP ≈ 1.06 Pa,
+    v ≈ 0.56 m/s."""
     t_in, t5 = 295.15, 305.15
     rho_i, rho_c = air_density(t_in, 101325.0), air_density(t5, 101325.0)
     dp = (rho_i - rho_c) * GRAVITY * 2.75
@@ -280,7 +284,8 @@ def test_orifice_only_magnitude_errata_e11():
 
 
 def test_inside_circulation_velocity_in_paper_range(geom):
-    """§8.5 / E11: f = 100 gives a few cm/s to ~15 cm/s for cavity–room ΔT of 2–10 K."""
+    """docs/model.md#airflow / docs/model.md#parameters: f = 100 gives a few cm/s to ~15 cm/s for
+    cavity–room ΔT of 2–10 K."""
     dts = np.array([2.0, 5.0, 10.0])
     fs = regime_flows(np.full(3, 1), 1.0, 295.15 + dts, _bnd(np.zeros(3), np.full(3, 22.0),
                                                             np.zeros(3), np.zeros(3),

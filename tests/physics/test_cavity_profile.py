@@ -65,8 +65,8 @@ def _one_step(cfg, regime: int):
 
 @pytest.mark.parametrize("regime", [1, 3])
 def test_step_conserves_energy_with_either_profile(suwon, regime):
-    # ΔU over the step equals the boundary heat at the exact step mean (errata E18),
-    # whichever outlet temperature the x5 balance uses.
+    # ΔU over the step equals the boundary heat at the exact step mean
+    # (docs/model.md#energy-balance), whichever outlet temperature the x5 balance uses.
     for model, _, x, res in _one_step(suwon, regime).values():
         du = (model.capacity * (res.x_next - x)).sum() / model.nc.dt
         assert du == pytest.approx(float(res.heat_in_wm2[0]), rel=1e-6, abs=1e-6)

@@ -1,4 +1,4 @@
-"""Long-wave radiation (physics §6, errata E19.4)."""
+"""Long-wave radiation (docs/model.md#longwave, docs/model.md#sky)."""
 
 from __future__ import annotations
 
@@ -24,7 +24,7 @@ T20 = 293.15
 
 
 def test_exchange_matrix_vectors():
-    """[PROTO] vectors of physics §6.2, printed to 4 decimals."""
+    """[PROTO] vectors of docs/model.md#longwave, printed to 4 decimals."""
     got = cavity_exchange_matrix(0.10, 0.58, 0.399, 0.84)
     expected = [[-0.0995, 0.0644, 0.0351], [0.0644, -0.7482, 0.6838], [0.0351, 0.6838, -0.7189]]
     np.testing.assert_allclose(got, expected, atol=6e-5)

@@ -1,4 +1,5 @@
-"""The coupled lumped model: invariants, magnitudes and the coupling (physics §9–§12, §16)."""
+"""The coupled lumped model: invariants, magnitudes and the coupling (docs/model.md#coupling,
+docs/model.md#departures)."""
 
 from __future__ import annotations
 
@@ -18,7 +19,8 @@ from tests.conftest import PANELS
 
 def _forcing(*, t_out=0.0, t_in=22.0, beam=0.0, diffuse=0.0, wind=0.0, sky_drop=0.0,
              n=1) -> Forcing:
-    """Constant façade boundary (°C, W/m2) at the winter-noon sun of physics §4.2."""
+    """Constant façade boundary (°C, W/m2) at the winter-noon sun of
+    docs/model.md#solar-geometry."""
     one = np.ones(n)
     return Forcing(time_s=0 * one, t_out_k=(t_out + T_ZERO) * one, t_in_k=(t_in + T_ZERO) * one,
                    t_mrt_k=(t_in + T_ZERO) * one, t_rad_out_k=(t_out - sky_drop + T_ZERO) * one,
@@ -57,7 +59,8 @@ def test_no_sun_steady_state_lies_between_outdoor_and_room(model, optics, regime
 
 
 def test_energy_balance_closes_over_a_real_day(suwon):
-    """Errata E18 over the SURFRAD day: ΔU = ∫(S + boundary flows) dt to round-off."""
+    """docs/model.md#energy-balance over the SURFRAD day: ΔU = ∫(S + boundary flows) dt to
+    round-off."""
     series = load_weather("surfrad-alamosa-2016-01-01")
     for afr in (1, 3, 7, 9, 10):
         s = summarize(run_lumped(suwon, series, phi_deg=18.0, afr=afr, or_pct=60.0))
@@ -79,10 +82,12 @@ def test_regime_ten_has_no_flow_and_no_air_gain(model, optics):
 
 
 def test_winter_sun_magnitudes_of_physics_8_5(model, optics):
-    """§8.5 [PROTO] case, within a factor 1.5: T_o 0 °C, T_i 22 °C, I_b 600, I_d 150 W/m2.
+    """docs/model.md#airflow [PROTO] case, within a factor 1.5: T_o 0 °C, T_i 22 °C, I_b 600, I_d
+    150 W/m2.
 
     Regime 1 with f = 85: v 0.11–0.16 m/s, cavity air 28–35 °C, louver 36–61 °C over the
-    louver angles; regime 10: cavity ≈ 67 °C, louver ≈ 82 °C (E11: 66.5 / 84 °C).
+    louver angles; regime 10: cavity ≈ 67 °C, louver ≈ 82 °C (docs/model.md#parameters: 66.5 / 84
+    °C).
     """
     f = _forcing(beam=600.0, diffuse=150.0, wind=1.0, sky_drop=12.0)
     angles = np.radians(np.array([-45.0, 0.0, 30.0, 60.0]))
@@ -119,7 +124,8 @@ def _run_diagonal_supply(cfg, steps=40):
 
 
 def test_chattering_case_gives_non_oscillating_flow(suwon):
-    """§16 item 8 (regime 7 after E1: out → EB ↑ → IT → room), T_o 0, T_i 22, weak sun.
+    """docs/model.md#departures item 8 (regime 7 after docs/model.md#regimes: out → EB
+    ↑ → IT → room), T_o 0, T_i 22, weak sun.
 
     The default implicit coupling gives a smooth flow; the paper's ping-pong at 60 s
     flips direction every step (the instability the spec warns about).

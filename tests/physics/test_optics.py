@@ -1,4 +1,5 @@
-"""Short-wave optics: glass, DGU, louver slat cell and the multilayer balance (physics §5)."""
+"""Short-wave optics: glass, DGU, louver slat cell and the multilayer balance
+(docs/model.md#optics)."""
 
 from __future__ import annotations
 
@@ -24,7 +25,7 @@ from dsfd.physics.optics import (
 
 RAD = np.pi / 180.0
 
-# ISO 15099 test louver of the EnergyPlus ER comparison table (physics §5.3.6).
+# ISO 15099 test louver of the EnergyPlus ER comparison table (docs/model.md#slat-cell).
 ISO = dict(width=0.016, pitch=0.012)
 SUWON = dict(width=0.05, pitch=0.045)
 SUWON_GLASS = ((0.600, 0.170, 0.220), (0.775, 0.071, 0.071), (0.600, 0.220, 0.170))
@@ -35,7 +36,7 @@ def _faces(rho_up: float, rho_dn: float) -> dict[str, float]:
 
 
 # ------------------------------------------------------------------------------------------
-# ISO 15099 reference vectors (physics §5.3.6), M = 5, tolerance ±0.002
+# ISO 15099 reference vectors (docs/model.md#slat-cell), M = 5, tolerance ±0.002
 # ------------------------------------------------------------------------------------------
 
 ISO_BEAM_ROWS = [
@@ -109,7 +110,7 @@ def test_iso15099_back_side():
 
 
 def test_suwon_illustrative_table():
-    """Suwon louver table of physics §5.3.6 (w 0.05, s 0.045, rho 0.05, profile 30°).
+    """Suwon louver table of docs/model.md#slat-cell (w 0.05, s 0.045, rho 0.05, profile 30°).
 
     This is a [PROTO] table, produced by a throw-away prototype of the same method: a
     regression check of this implementation against it, not an independent reference.
@@ -394,7 +395,7 @@ def test_dgu_identity():
 
 
 # ------------------------------------------------------------------------------------------
-# Multilayer balance (§5.4, errata E3)
+# Multilayer balance (docs/model.md#multilayer)
 # ------------------------------------------------------------------------------------------
 
 

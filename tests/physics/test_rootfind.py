@@ -1,4 +1,4 @@
-"""The vectorised coupling fixed-point solver (physics §11, errata E9)."""
+"""The vectorised coupling fixed-point solver (docs/model.md#coupling)."""
 
 from __future__ import annotations
 

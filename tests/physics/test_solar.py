@@ -109,7 +109,7 @@ def test_solar_position_broadcasts():
 # --- angles on the façade -----------------------------------------------------------------
 
 def test_physics_md_check_values_at_suwon():
-    # physics.md §4.2 [PROTO]: Z = 59.180, γ_s = 168.792 -> θ = 32.605, φ_s = 31.307
+    # docs/model.md#solar-geometry [PROTO]: Z = 59.180, γ_s = 168.792 -> θ = 32.605, φ_s = 31.307
     aoi, profile = solar.incidence_and_profile(59.180, 168.792, 180.0)
     assert aoi == pytest.approx(32.605, abs=1e-3)
     assert profile == pytest.approx(31.307, abs=1e-3)

@@ -1,4 +1,4 @@
-"""Exact ZOH against an independent fine ODE solution and the Van Loan forms (§10, E8)."""
+"""Exact ZOH against an independent fine ODE solution and the Van Loan forms (docs/model.md#zoh)."""
 
 from __future__ import annotations
 
@@ -53,7 +53,7 @@ def test_eigen_route_equals_augmented_exponential(seed):
 
 
 def test_exact_average_agrees_with_14x14_van_loan():
-    """Errata E8: x̄ = A⁻¹((x_{k+1} − x_k)/T − b) equals F[:7, 7:] z_k / T."""
+    """docs/model.md#zoh: x̄ = A⁻¹((x_{k+1} − x_k)/T − b) equals F[:7, 7:] z_k / T."""
     rng = np.random.default_rng(7)
     lap, q = _network(rng)
     a, b = lap / CAP[:, None], q / CAP

@@ -56,14 +56,14 @@ def test_fixed_holds_its_command_and_a_closed_cavity_brings_no_air(sunny):
     fixed = sunny["fixed"]
     assert set(fixed.commands) == {Command(0.0, 10, 100.0)}
     assert fixed.louver_moves() == 0
-    # Regime 10: all dampers shut, so no cavity air reaches the room (errata E2).
+    # Regime 10: all dampers shut, so no cavity air reaches the room (docs/model.md#q-air).
     assert np.all(fixed.heat_j["q_air"] == 0.0)
     # But the sun does: transmitted solar and the pane's heat are positive at noon.
     assert fixed.heat_j["q_sol_trans"].sum() > 0.0
 
 
 def test_objective_is_eq4_in_heating(sunny):
-    """Physics §12.5: heating J = −∫(Q_cv,rd + Q_sol + Q_air + Q_DA) dt."""
+    """docs/model.md#control-objective: heating J = −∫(Q_cv,rd + Q_sol + Q_air + Q_DA) dt."""
     for r in sunny.values():
         assert r.heating.all()  # January in Suwon: heating throughout
         q = r.heat_j

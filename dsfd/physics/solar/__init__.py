@@ -2,7 +2,7 @@
 
 Pure numpy: every function takes array_like inputs that broadcast against each other and
 returns float arrays; times are UTC unix seconds, angles carry ``_deg`` in their names and
-irradiances are in W/m2 (physics.md §4). The implementation is split over
+irradiances are in W/m2 (docs/model.md#solar). The implementation is split over
 :mod:`~dsfd.physics.solar.position` (sun position, I0, angles on a plane, air mass),
 :mod:`~dsfd.physics.solar.decomposition` (Erbs, DISC, DIRINT) and
 :mod:`~dsfd.physics.solar.transposition` (isotropic, Hay–Davies, Perez); import the public

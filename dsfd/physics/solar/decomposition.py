@@ -1,6 +1,6 @@
 """Decomposition of global horizontal irradiance into direct normal and diffuse parts.
 
-Erbs (lumped model, physics.md §4.4), DISC and DIRINT (truth plant). All expect the
+Erbs (lumped model, docs/model.md#decomposition), DISC and DIRINT (truth plant). All expect the
 geometric (true) zenith.
 """
 
@@ -134,7 +134,7 @@ def erbs(
 
     Notes
     -----
-    physics.md §4.4; kt is clipped to [0, 2] as the spec says (pvlib 0.16.1 clips to
+    docs/model.md#decomposition; kt is clipped to [0, 2] here (pvlib 0.16.1 clips to
     [0, 1]; the split is the same because DF is constant above kt = 0.8)::
 
         DF = 1 − 0.09 kt                                              kt ≤ 0.22

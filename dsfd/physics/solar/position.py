@@ -2,7 +2,7 @@
 
 Times are UTC unix seconds; angles carry ``_deg`` in their names. Azimuths are clockwise
 from north (south = 180°), surface tilt is from horizontal (vertical façade = 90°),
-physics.md §1 and §4.1–4.3.
+docs/model.md#conventions, docs/model.md#solar-geometry.
 """
 
 from __future__ import annotations
@@ -60,8 +60,8 @@ def solar_position(
 
     Notes
     -----
-    physics.md §4.1. With Julian centuries ``jc`` since J2000.0 the sun's mean longitude
-    L0, mean anomaly M, orbit eccentricity e, equation of centre C, apparent longitude λ
+    docs/model.md#solar-geometry. With Julian centuries ``jc`` since J2000.0 the sun's mean
+    longitude L0, mean anomaly M, orbit eccentricity e, equation of centre C, apparent longitude λ
     and corrected obliquity ε give δ = asin(sin ε sin λ) and (y = tan²(ε/2))::
 
         EoT = 4·deg(y sin2L0 − 2e sinM + 4ey sinM cos2L0 − ½y² sin4L0 − 1.25e² sin2M)
@@ -190,7 +190,7 @@ def extraterrestrial_irradiance(
 
     Notes
     -----
-    physics.md §4.3, with the day angle B = 2π(doy − 1)/365::
+    docs/model.md#solar-geometry, with the day angle B = 2π(doy − 1)/365::
 
         I0 = S (1.00011 + 0.034221 cosB + 0.00128 sinB + 0.000719 cos2B + 0.000077 sin2B)
 
@@ -234,7 +234,7 @@ def incidence_and_profile(
 
     Notes
     -----
-    physics.md §4.2 with Δγ = γ_s − γ_f and α = 90° − Z::
+    docs/model.md#solar-geometry with Δγ = γ_s − γ_f and α = 90° − Z::
 
         cos θ = cos β cos Z + sin β sin Z cos Δγ
         φ_s   = atan2(cos Z, max(sin Z cos Δγ, 0))      (= atan(tan α / cos Δγ) in front)

@@ -1,7 +1,7 @@
 """Transposition of beam and diffuse irradiance onto a tilted (façade) plane.
 
 Isotropic, Hay–Davies (lumped model default) and Perez 1990 (truth plant) sky models,
-physics.md §4.5. The zenith may be geometric or apparent (the pvlib reference tables use
+docs/model.md#transposition. The zenith may be geometric or apparent (the pvlib reference tables use
 the apparent zenith; the difference matters only within ~5° of the horizon).
 """
 
@@ -62,7 +62,7 @@ class FacadeIrradiance(NamedTuple):
 
 
 def beam_on_surface(dni: ArrayLike, aoi_deg: ArrayLike) -> FloatArray:
-    """Beam irradiance on the plane, DNI · max(cos θ, 0) [W/m2] (physics.md §4.5)."""
+    """Beam irradiance on the plane, DNI · max(cos θ, 0) [W/m2] (docs/model.md#transposition)."""
     return _as_float(dni) * np.maximum(np.cos(np.radians(_as_float(aoi_deg))), 0.0)
 
 
@@ -106,7 +106,7 @@ def sky_diffuse_haydavies(
 
     Notes
     -----
-    physics.md §4.5, with the anisotropy index A_i = DNI/I0::
+    docs/model.md#transposition, with the anisotropy index A_i = DNI/I0::
 
         I_sky = DHI [A_i R_b + (1 − A_i)(1 + cos β)/2],   R_b = max(cos θ, 0)/max(cos Z, 0.01745)
 
@@ -210,10 +210,10 @@ def facade_irradiance(
         Sun position (apparent zenith in the pvlib reference; true zenith is fine).
     surface_azimuth_deg, surface_tilt_deg : array_like, [deg]
     albedo : array_like, [-]
-        Ground reflectance ρ_g (physics.md default 0.2).
+        Ground reflectance ρ_g (default 0.2, docs/model.md#transposition).
     dni_extra : array_like, [W/m2]
     model : {"haydavies", "isotropic", "perez"}
-        Sky-diffuse model; Hay–Davies is the lumped-model default (physics.md §4.5).
+        Sky-diffuse model; Hay–Davies is the lumped-model default (docs/model.md#transposition).
     airmass : array_like, optional, [-]
         Relative air mass for Perez; default :func:`relative_airmass` of ``zenith_deg``.
 

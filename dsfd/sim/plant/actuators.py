@@ -1,4 +1,4 @@
-"""Louver motor and damper actuators of the simulated plant (physics §15.5).
+"""Louver motor and damper actuators of the simulated plant (docs/model.md#plant-sensors).
 
 Commands are validated, never clipped: an angle off the motor's 18° grid, a regime the
 panel's dampers cannot realise or an opening outside 0..100 % raises :class:`CommandError`,
@@ -10,7 +10,7 @@ which the daemon can catch and log. Accepted commands drive analytic trajectorie
   commanded OR, quantised to 1 %, the others 0), time constant τ = t_rise / ln 9 so that
   the 10–90 % rise time is 15 s (Modelica Buildings ``riseTime`` default).
 
-With ``ideal=True`` both follow the command instantly (errata E7.14).
+With ``ideal=True`` both follow the command instantly (docs/model.md#plant-switches).
 """
 
 from __future__ import annotations
@@ -57,7 +57,7 @@ class Command:
 
 
 def damper_mask(afr: int) -> np.ndarray:
-    """Open dampers (EB, ET, IB, IT) of a regime as a bool array (physics §8.3, E1)."""
+    """Open dampers (EB, ET, IB, IT) of a regime as a bool array (docs/model.md#regimes)."""
     return np.array([name in REGIME_OPENINGS[afr] for name in OPENING_NAMES])
 
 

@@ -1,6 +1,7 @@
-"""Second-order upwind correction of the vertical advection in the cavity (physics §15.1).
+"""Second-order upwind correction of the vertical advection in the cavity
+(docs/model.md#plant-layout).
 
-The base scheme is the first-order upwind of errata E20, written as advective links:
+The base scheme is the first-order upwind (docs/model.md#plant-layout), written as advective links:
 segment k receives ṁ c_p (T_{k−1} − T_k). Its numerical diffusion makes the cavity air
 (and with it the panes, the louver and the stack pressure) converge only to first order in
 δz = H_g/N: in sunny regime-1 runs the mid-height states and the outlet air change by

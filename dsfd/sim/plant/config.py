@@ -1,12 +1,14 @@
-"""Options and "true" parameters of the stratified truth plant (physics §15, errata E7, E16).
+"""Options and "true" parameters of the stratified truth plant (docs/model.md#truth-plant,
+docs/model.md#plant-switches, docs/model.md#true-parameters).
 
 :class:`PlantOptions` holds one switch per refinement of the truth plant over the lumped
-model: the 17 switches of errata E7 plus the numerical and actuator constants.
+model: the 17 lumped-equivalence switches (docs/model.md#plant-switches) plus the numerical and
+actuator constants.
 :meth:`PlantOptions.lumped_equivalent` sets every switch to the lumped model's setting,
-which is what the N = 1 equivalence test of errata E7 runs.
+which is what the N = 1 equivalence test (docs/model.md#plant-switches) runs.
 
-:class:`TrueParameters` is the plant's hidden truth (errata E16): multipliers on the
-convective correlations and the cavity form loss f_true, drawn from a seed, plus the
+:class:`TrueParameters` is the plant's hidden truth (docs/model.md#true-parameters): multipliers on
+the convective correlations and the cavity form loss f_true, drawn from a seed, plus the
 optional slow drift of the louver reflectance and one convective multiplier.
 """
 
@@ -22,7 +24,7 @@ import numpy as np
 from dsfd.config.loader import setting
 from dsfd.config.panel import PanelConfig
 
-#: Names of the six convective multipliers, in the order of the lumped θ (physics §13).
+#: Names of the six convective multipliers, in the order of the lumped θ (docs/model.md#parameters).
 H_NAMES: tuple[str, ...] = ("h_out", "h_ca1", "h_ca2", "h_ca3", "h_ca4", "h_in")
 SECONDS_PER_DAY = 86400.0
 
@@ -31,78 +33,87 @@ SECONDS_PER_DAY = 86400.0
 class PlantOptions:
     """Switches and constants of the truth plant; defaults are the full-fidelity plant.
 
-    The first seventeen fields are the switches of errata E7, each documented with its
-    lumped-model setting, and ``advection`` an eighteenth refinement (second-order
-    vertical advection); :meth:`lumped_equivalent` sets all of them at once.
+    The first seventeen fields are the lumped-equivalence switches (docs/model.md#plant-switches),
+    each documented with its lumped-model setting, and ``advection`` an eighteenth refinement
+    (second-order vertical advection); :meth:`lumped_equivalent` sets all of them at once.
     """
 
-    # --- the 17 switches of errata E7 --------------------------------------------------
+    # --- the 17 lumped-equivalence switches (docs/model.md#plant-switches) ------------------------
     n_segments: int = setting(
-        10, doc="E7.1: vertical segments N of the glazed height (lumped: 1)", ge=1, le=200)
+        10, doc="docs/model.md#plant-switches: vertical segments N of the glazed height "
+        "(lumped: 1)", ge=1, le=200)
     split_cavity: bool = setting(
-        True, doc="E7.2, E15: cavity air split on either side of the louver into T5o / T5i "
-        "(lumped: False, one T5)")
+        True, doc="docs/model.md#plant-switches, docs/model.md#plant-layout: cavity air split on "
+        "either side of the louver into T5o / T5i (lumped: False, one T5)")
     plenums: bool = setting(
-        True, doc="E7.3, E15: one adiabatic air node per damper row (lumped: False)")
+        True, doc="docs/model.md#plant-switches, docs/model.md#plant-layout: one adiabatic air "
+        "node per damper row (lumped: False)")
     damper_model: Literal["orifice", "exponential"] = setting(
-        "exponential", doc="E7.4, §8.1: 'orifice' 1/(C_d OR A_d)² (lumped) or the IBPSA "
-        "exponential damper ζ(OR)/A_d²")
+        "exponential", doc="docs/model.md#plant-switches, docs/model.md#plant-airflow: 'orifice' "
+        "1/(C_d OR A_d)² (lumped) or the IBPSA exponential damper ζ(OR)/A_d²")
     louver_flow_resistance: bool = setting(
-        True, doc="E7.5, §15.2: louver-angle dependent cavity loss K_L(φ) of the orifice "
-        "paths (lumped: True, the lumped model's default model.louver_flow_loss)")
+        True, doc="docs/model.md#plant-switches, docs/model.md#louver-flow-loss: louver-angle "
+        "dependent cavity loss K_L(φ) of the orifice paths (lumped: True, the lumped model's "
+        "default model.louver_flow_loss)")
     diagonal_flow: Literal["power_law", "orifice"] = setting(
-        "orifice", doc="E7.6: regimes 5–8 by c·OR·|ΔP|^n (lumped) or as orifices (E16)")
+        "orifice", doc="docs/model.md#plant-switches: regimes 5–8 by c·OR·|ΔP|^n (lumped) or as "
+        "orifices (docs/model.md#true-parameters)")
     convection: Literal["constant", "correlations"] = setting(
-        "correlations", doc="E7.7: the six constant h's (lumped) or local correlations "
-        "(Churchill–Chu/parallel plates, DOE-2 exterior, ISO 15099 room side)")
+        "correlations", doc="docs/model.md#plant-switches: the six constant h's (lumped) or local "
+        "correlations (Churchill–Chu/parallel plates, DOE-2 exterior, ISO 15099 room side)")
     dgu_gap: Literal["constant_h", "iso15099"] = setting(
-        "iso15099", doc="E7.8: h_ca4 constant (lumped) or the ISO 15099 closed-cavity Nu "
-        "with the local pane temperature difference")
+        "iso15099", doc="docs/model.md#plant-switches: h_ca4 constant (lumped) or the ISO 15099 "
+        "closed-cavity Nu with the local pane temperature difference")
     radiation: Literal["three_layer", "three_layer_fine"] = setting(
-        "three_layer_fine", doc="E7.9, E17: §6.2 exchange with the lumped IR properties "
-        "(M = 5) or with M = 10 and the slat-thickness correction; always full T⁴")
+        "three_layer_fine", doc="docs/model.md#plant-switches, docs/model.md#plant-heat-transfer: "
+        "three-layer exchange (docs/model.md#longwave) with the lumped IR properties (M = 5) or "
+        "with M = 10 and the slat-thickness correction; always full T⁴")
     optics: Literal["lumped", "fine"] = setting(
-        "fine", doc="E7.10: lumped optics and forcing (M = 5, Erbs + Hay–Davies) or M = 10, "
-        "slat thickness, sky/ground split, DIRINT + Perez")
+        "fine", doc="docs/model.md#plant-switches: lumped optics and forcing (M = 5, "
+        "Erbs + Hay–Davies) or M = 10, slat thickness, sky/ground split, DIRINT + Perez")
     solar_time: Literal["step", "continuous"] = setting(
-        "continuous", doc="E7.11, E19.2: sun and optics at the step midpoint held over the "
-        "step (lumped) or evaluated continuously")
+        "continuous", doc="docs/model.md#plant-switches, docs/model.md#time-convention: sun and "
+        "optics at the step midpoint held over the step (lumped) or evaluated continuously")
     weather_hold: Literal["zoh", "linear"] = setting(
-        "linear", doc="E7.12: weather held per model step (lumped) or interpolated "
-        "linearly in time")
+        "linear", doc="docs/model.md#plant-switches: weather held per model step (lumped) or "
+        "interpolated linearly in time")
     air_properties: Literal["constant", "variable"] = setting(
-        "variable", doc="E7.13: ρ_a, c_p of the model options in c5, c6 and ṁc_p (lumped) or "
-        "ρ(T) at the site's standard pressure in the air heat capacities")
+        "variable", doc="docs/model.md#plant-switches: ρ_a, c_p of the model options in c5, c6 and "
+        "ṁc_p (lumped) or ρ(T) at the site's standard pressure in the air heat capacities")
     actuators: Literal["ideal", "realistic"] = setting(
-        "realistic", doc="E7.14: instantaneous (lumped) or louver rate limit, damper lag "
-        "and OR quantisation")
+        "realistic", doc="docs/model.md#plant-switches: instantaneous (lumped) or louver rate "
+        "limit, damper lag and OR quantisation")
     glass_vertical_conduction: bool = setting(
-        True, doc="E7.15: conduction along the panes between segments (lumped: False)")
+        True, doc="docs/model.md#plant-switches: conduction along the panes between segments "
+        "(lumped: False)")
     sensors: Literal["ideal", "realistic"] = setting(
-        "realistic", doc="E7.16: sensors return the true states (lumped comparison) or "
-        "noisy, biased readings with configured faults")
+        "realistic", doc="docs/model.md#plant-switches: sensors return the true states (lumped "
+        "comparison) or noisy, biased readings with configured faults")
     sky_model: Literal["lumped", "clark_allen"] = setting(
-        "clark_allen", doc="E7.17: the lumped model's sky model (config) or Clark–Allen with "
-        "the dew point from the relative humidity; T_gnd = T_o and p_atm in both")
+        "clark_allen", doc="docs/model.md#plant-switches: the lumped model's sky model (config) or "
+        "Clark–Allen with the dew point from the relative humidity; T_gnd = T_o and p_atm in both")
     advection: Literal["upwind", "upwind2"] = setting(
-        "upwind2", doc="Vertical advection of the cavity air: first-order upwind of E20 "
-        "(lumped; converges as δz) or with the van Albada-limited second-order correction "
-        "(converges as δz², see dsfd.sim.plant.advection) [ENG]")
+        "upwind2", doc="Vertical advection of the cavity air: first-order upwind "
+        "(docs/model.md#plant-layout) (lumped; converges as δz) or with the van Albada-limited "
+        "second-order correction (converges as δz², see dsfd.sim.plant.advection) [ENG]")
     # --- constants ----------------------------------------------------------------------
     lateral_h_wm2k: float = setting(
-        20.0, doc="E15: h_x of the exchange between the sub-cavities through the louver",
+        20.0, doc="docs/model.md#plant-layout: h_x of the exchange between the sub-cavities "
+        "through the louver",
         unit="W/(m2 K)", ge=0)
     louver_rate_degs: float = setting(
-        3.0, doc="§15.5: louver motor speed", unit="deg/s", gt=0)
+        3.0, doc="docs/model.md#plant-sensors: louver motor speed", unit="deg/s", gt=0)
     damper_rise_time_s: float = setting(
-        15.0, doc="§15.5: 10–90 % rise time of the first-order damper lag", unit="s", gt=0)
+        15.0, doc="docs/model.md#plant-sensors: 10–90 % rise time of the first-order damper "
+        "lag", unit="s", gt=0)
     or_quantum_pct: float = setting(
-        1.0, doc="§15.5: damper opening resolution", unit="%", gt=0, le=100)
+        1.0, doc="docs/model.md#plant-sensors: damper opening resolution", unit="%", gt=0, le=100)
     glass_conductivity_wmk: float = setting(
-        1.0, doc="§2: glass conductivity for the vertical conduction", unit="W/(m K)", gt=0)
+        1.0, doc="docs/model.md#constants: glass conductivity for the vertical "
+        "conduction", unit="W/(m K)", gt=0)
     optics_segments: int = setting(
-        10, doc="§5.3.1: slat segments M of the fine optics and IR", ge=1, le=50)
-    # --- drift (errata E16 / issue 3: dirt) -------------------------------------------
+        10, doc="docs/model.md#slat-cell: slat segments M of the fine optics and IR", ge=1, le=50)
+    # --- drift (docs/model.md#true-parameters / issue 3: dirt) ------------------------------------
     drift_reflectance_per_day: float = setting(
         0.0, doc="Change of the louver solar reflectance (both faces) per day", unit="1/d")
     drift_h_name: str = setting(
@@ -127,7 +138,8 @@ class PlantOptions:
 
     @classmethod
     def lumped_equivalent(cls, **overrides: object) -> PlantOptions:
-        """Every E7 switch at the lumped model's setting (N = 1), others as given.
+        """Every lumped-equivalence switch (docs/model.md#plant-switches) at the lumped model's
+        setting (N = 1), others as given.
 
         One air node is well mixed, so this plant is the lumped model with
         ``model.cavity_air_profile: well_mixed``; with more segments the column stratifies
@@ -157,13 +169,13 @@ def _literal_choices(annotation: object) -> tuple[str, ...]:
     return tuple(part.strip().strip("'\"") for part in inner.split(","))
 
 
-#: Range of the log-uniform f_true prior [-] (errata E16).
+#: Range of the log-uniform f_true prior [-] (docs/model.md#true-parameters).
 F_TRUE_RANGE = (20.0, 2000.0)
 
 
 @dataclass(frozen=True, kw_only=True)
 class TrueParameters:
-    """The plant's hidden parameters (errata E16).
+    """The plant's hidden parameters (docs/model.md#true-parameters).
 
     Attributes
     ----------
@@ -175,7 +187,7 @@ class TrueParameters:
         the cavity velocity).
     c, n : float
         Power-law coefficient [m3/(s Pa^n)] and exponent [-]; used only with
-        ``diagonal_flow='power_law'`` (E16: no "true" value otherwise).
+        ``diagonal_flow='power_law'`` (docs/model.md#true-parameters: no "true" value otherwise).
     """
 
     h_multipliers: tuple[float, float, float, float, float, float]
@@ -185,7 +197,8 @@ class TrueParameters:
 
     @classmethod
     def draw(cls, cfg: PanelConfig, rng: np.random.Generator) -> TrueParameters:
-        """Seeded draw: m log-uniform in [0.5, 2], f_true log-uniform in [20, 2000] (E16)."""
+        """Seeded draw: m log-uniform in [0.5, 2], f_true log-uniform in [20, 2000]
+        (docs/model.md#true-parameters)."""
         m = np.exp(rng.uniform(math.log(0.5), math.log(2.0), size=6))
         f = float(np.exp(rng.uniform(*(math.log(v) for v in F_TRUE_RANGE))))
         p = cfg.parameters
@@ -194,8 +207,9 @@ class TrueParameters:
 
     @classmethod
     def prior_centre(cls, cfg: PanelConfig) -> TrueParameters:
-        """The centre of the E16 prior: multipliers 1 and f_true = √(20·2000) ≈ 200 (the
-        geometric mean of its log-uniform range); c, n the config's defaults."""
+        """The centre of the true-parameter prior (docs/model.md#true-parameters): multipliers 1 and
+        f_true = √(20·2000) ≈ 200 (the geometric mean of its log-uniform range); c, n the config's
+        defaults."""
         p = cfg.parameters
         return cls(h_multipliers=(1.0,) * 6, f=math.sqrt(F_TRUE_RANGE[0] * F_TRUE_RANGE[1]),
                    c=p.c.default, n=p.n.default)
@@ -212,7 +226,8 @@ class TrueParameters:
         return np.array([getattr(p, k).default for k in H_NAMES]) * np.array(self.h_multipliers)
 
     def lumped_theta(self, cfg: PanelConfig) -> np.ndarray:
-        """The lumped θ that describes this plant exactly in the E7 configuration."""
+        """The lumped θ that describes this plant exactly in the lumped-equivalent configuration
+        (docs/model.md#plant-switches)."""
         return np.concatenate([self.constant_h(cfg), [self.f, self.c, self.n]])
 
 

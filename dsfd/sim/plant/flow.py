@@ -1,16 +1,17 @@
-"""Cavity airflow of the truth plant, solved inside the right-hand side (physics §8, §15.2).
+"""Cavity airflow of the truth plant, solved inside the right-hand side (docs/model.md#airflow,
+docs/model.md#plant-airflow).
 
 Openings EB, ET, IB, IT (0..3) with mass flows positive INTO the cavity. The cavity is one
 pressure node whose hydrostatic column is the integrated, stratified air column
-(errata E5): p_c(z) = P_c − g ∫_0^z ρ(T5(z')) dz', so each opening sees
+(docs/model.md#plant-airflow): p_c(z) = P_c − g ∫_0^z ρ(T5(z')) dz', so each opening sees
 
     Δp_k = p_B,k − p_c(z_k) = head_k − P_c,    head_k = p_B,k + g ∫_0^{z_k} ρ dz.
 
 Two open dampers (regimes 1–8): closed form with the inflow density at the inlet and the
-cavity density at the outlet (errata E4), or the power law of the lumped model for the
-diagonal regimes (``diagonal_flow='power_law'``). Three or four open dampers (regime 9, or
-while dampers move between regimes): Σ ṁ_k(P_c) = 0 by safeguarded Newton (§8.4.4). All
-laws are regularised below Δp_t with the IBPSA polynomial (errata E10).
+cavity density at the outlet (docs/model.md#path-flows), or the power law of the lumped model for
+the diagonal regimes (``diagonal_flow='power_law'``). Three or four open dampers (regime 9, or
+while dampers move between regimes): Σ ṁ_k(P_c) = 0 by safeguarded Newton (docs/model.md#one-node).
+All laws are regularised below Δp_t with the IBPSA polynomial (docs/model.md#regularisation).
 
 These functions run thousands of times per simulated hour, so they work on Python floats
 (four openings) rather than numpy arrays.
@@ -28,14 +29,15 @@ from dsfd.sim.plant.physics import damper_loss_scalar
 
 EB, ET, IB, IT = 0, 1, 2, 3
 IS_TOP = (False, True, False, True)
-#: IBPSA regularisation slope parameter γ (errata E10).
+#: IBPSA regularisation slope parameter γ (docs/model.md#regularisation).
 _GAMMA = 1.5
 
 NONE, PAIR, NETWORK = 0, 1, 2
 
 
 def reg_coefficients(m: float) -> tuple[float, float, float, float]:
-    """IBPSA polynomial coefficients a, b, c, d for exponent ``m`` (errata E10)."""
+    """IBPSA polynomial coefficients a, b, c, d for exponent ``m``
+    (docs/model.md#regularisation)."""
     return (_GAMMA, m * m / 8 - 3 * _GAMMA - 1.5 * m + 35 / 8,
             -m * m / 4 + 3 * _GAMMA + 2.5 * m - 21 / 4, m * m / 8 - _GAMMA - m + 15 / 8)
 
@@ -74,7 +76,7 @@ class OpeningData:
     area_m2: np.ndarray
     discharge: np.ndarray
     cavity_area_m2: float
-    floor: float  # minimum OR of an open damper (errata E14)
+    floor: float  # minimum OR of an open damper (docs/model.md#openings)
     damper_model: str
 
     def __post_init__(self) -> None:
@@ -88,10 +90,11 @@ def opening_resistance(od: OpeningData, y: Sequence[float], target_open: Sequenc
 
     Notes
     -----
-    ``orifice`` (lumped, §8.1): 1/(C_d y_eff A_d)², y_eff = max(y, floor) for a damper of
-    the commanded set, y otherwise; ``exponential`` (truth, §8.1, E16): ζ(y)/A_d². Both
-    add half the cavity loss (f + K_L)/(2A_c²) to each opening, so a two-opening path has
-    Σζ(A_c/A_d)² + K_L + f referenced to the cavity velocity (errata E13, E16).
+    ``orifice`` (lumped, docs/model.md#plant-airflow): 1/(C_d y_eff A_d)², y_eff = max(y, floor) for
+    a damper of the commanded set, y otherwise; ``exponential`` (truth, docs/model.md#plant-airflow,
+    docs/model.md#true-parameters): ζ(y)/A_d². Both add half the cavity loss (f + K_L)/(2A_c²) to
+    each opening, so a two-opening path has Σζ(A_c/A_d)² + K_L + f referenced to the cavity velocity
+    (docs/model.md#one-node, docs/model.md#true-parameters).
     """
     cavity = (f + k_louver) / (2.0 * od.cavity_area_m2**2)
     out = []
@@ -147,7 +150,7 @@ def network_flows(fp: FlowPiece, head: list[float], rho_b: list[float],
     """Opening flows [kg/s] and cavity pressure P_c [Pa] with three or four open openings.
 
     Σ_k ṁ_k(P_c) = 0 with ṁ_k = reg(head_k − P_c; C_k = sqrt(2ρ_up,k/K_k)), ρ_up the
-    boundary density for inflow and the cavity node's for outflow (§8.4.4). Σṁ falls
+    boundary density for inflow and the cavity node's for outflow (docs/model.md#one-node). Σṁ falls
     strictly with P_c: Newton from the previous root, kept inside a shrinking bracket.
     """
     act = fp.active

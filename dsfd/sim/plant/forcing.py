@@ -4,7 +4,7 @@ The plant integrates continuously but reads its forcing from tables built once p
 model steps (one day by default): for every step k the boundary at its start (``a``) and
 end (``b``), and the absorbed short-wave of every louver position on the motor grid.
 Inside a step the right-hand side interpolates linearly between ``a`` and ``b`` (and in φ
-while the louver moves). The four combinations of the switches (errata E7.11, E7.12):
+while the louver moves). The four combinations of the switches (docs/model.md#plant-switches):
 
 ============================  ==========================================================
 ``weather_hold``/``solar_time`` what ``a`` and ``b`` hold
@@ -15,10 +15,11 @@ zoh / continuous              midpoint weather; sun at the start / end
 linear / step                 weather at the start / end; sun at the midpoint
 ============================  ==========================================================
 
-Optics (E7.10): ``lumped`` reuses the lumped model's forcing (Erbs + Hay–Davies, M = 5,
-uniform diffuse) so the E7 equivalence holds by construction; ``fine`` uses the measured
-DNI/DHI where the file has them (else DIRINT), Perez 1990, M = 10 segments with the slat
-thickness correction and the sky/ground diffuse split (physics §4.4–§5.3.7, §15.3).
+Optics (docs/model.md#plant-switches): ``lumped`` reuses the lumped model's forcing
+(Erbs + Hay–Davies, M = 5, uniform diffuse) so the N = 1 equivalence (docs/model.md#plant-switches)
+holds by construction; ``fine`` uses the measured DNI/DHI where the file has them (else DIRINT),
+Perez 1990, M = 10 segments with the slat thickness correction and the sky/ground diffuse split
+(docs/model.md#plant-forcing, docs/model.md#plant-heat-transfer).
 """
 
 from __future__ import annotations
@@ -68,9 +69,10 @@ class StepTable(NamedTuple):
     a, b : (n, 8)
         :data:`FIELDS` at the start and end of each step (SI, K).
     src_a, src_b : (n, m, 6), [W/m2]
-        Absorbed short-wave per m² façade in L1, L2, L3, louver (node order, E3), then the
-        solar power transmitted into the room and the daylighting benefit Q_DA (physics
-        §12.2, §12.4), both per m² façade (:data:`ROOM_COLUMNS`).
+        Absorbed short-wave per m² façade in L1, L2, L3, louver (node order,
+        docs/model.md#multilayer), then the solar power transmitted into the room and the
+        daylighting benefit Q_DA (docs/model.md#room-heat, docs/model.md#q-da), both per m² façade
+        (:data:`ROOM_COLUMNS`).
     windward : (n,) bool
     poa_wm2 : (n,), [W/m2]
         Façade-plane global irradiance at the step midpoint (for reports).
@@ -180,7 +182,7 @@ def lw_exchange_table(cfg: PanelConfig, options: PlantOptions,
 
     ``radiation='three_layer'``: the lumped model's IR properties (M from the config, no
     thickness); ``'three_layer_fine'``: M = ``optics_segments`` with the thickness
-    correction (errata E17). Physics §6.2.
+    correction (docs/model.md#plant-heat-transfer). docs/model.md#longwave.
     """
     phi = np.radians(np.asarray(phis_deg, float))
     if options.radiation == "three_layer" or cfg.louver is None:
@@ -249,7 +251,7 @@ def _knots_fine(cfg: PanelConfig, options: PlantOptions, w: WeatherInputs,
                            louver=NO_LOUVER if louver is None else louver,
                            diffuse_ground=ground)
     m, n = phis_rad.size, fi.beam.size
-    # Q_DA is a lighting proxy (physics §12.4 [ENG]): the lumped visible optics serve it.
+    # Q_DA is a lighting proxy (docs/model.md#q-da [ENG]): the lumped visible optics serve it.
     optics = FacadeOptics(cfg)
     q_da = optics.loads(facade_forcing(cfg, w), phis_rad).q_da_w / optics.area
     sources = np.stack([np.broadcast_to(s, (m, n)) for s in (sol.s1, sol.s2, sol.s3, sol.s4,

@@ -1,4 +1,4 @@
-"""Initial temperatures of the truth plant (errata E19.1)."""
+"""Initial temperatures of the truth plant (docs/model.md#initial-state)."""
 
 from __future__ import annotations
 

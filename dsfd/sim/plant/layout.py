@@ -1,4 +1,5 @@
-"""Node layout, capacities and link topology of the stratified truth plant (physics §15.1).
+"""Node layout, capacities and link topology of the stratified truth plant
+(docs/model.md#plant-layout).
 
 Nodes are stored kind-major: ``g1`` (L1), ``g2`` (L2), ``g3`` (L3), ``lv`` (louver),
 ``ao`` (cavity air, outer sub-cavity or the whole cavity), ``ai`` (inner sub-cavity, only
@@ -83,7 +84,7 @@ class Geometry:
     width: float
     height: float  # glazed height H_g
     depth: float
-    dz: float  # segment height δz = H_g/N (errata E6)
+    dz: float  # segment height δz = H_g/N (docs/model.md#plant-layout)
     stack: float  # Δz between damper centres
     z0: float  # bottom of the glazed section above the bottom damper centre
     damper_row: float  # plenum height h_d
@@ -109,7 +110,8 @@ def column_weights(lay: Layout, geo: Geometry) -> tuple[np.ndarray, np.ndarray]:
 
     Each segment contributes its overlap with [0, Δz]; the end pieces below and above the
     glazed section take the plenum temperature, or with plenums off the adjacent
-    segment's (errata E6). With a split cavity each sub-cavity carries half the weight.
+    segment's (docs/model.md#plant-layout). With a split cavity each sub-cavity carries half the
+    weight.
     """
     n = lay.n
     lo = geo.z0 + np.arange(n) * geo.dz
@@ -139,7 +141,8 @@ def capacities(cfg: PanelConfig, lay: Layout,
     Returns
     -------
     cap : (n_nodes,), [J/K]
-        With constant air properties (E7.13) ρ_a c_p V from the model options.
+        With constant air properties (docs/model.md#plant-switches) ρ_a c_p V from the model
+        options.
     air_volume : (n_nodes,), [m3]
         Air volume of each air node (0 for solid nodes).
     p_ref : float, [Pa]
@@ -256,7 +259,7 @@ class Topology:
 
 def build_topology(cfg: PanelConfig, opt: PlantOptions, lay: Layout,
                    geo: Geometry) -> Topology:
-    """Every link of the plant (physics §9.1 per segment, errata E15, E20)."""
+    """Every link of the plant (docs/model.md#network per segment, docs/model.md#plant-layout)."""
     n = lay.n
     i = lay.idx
     sym = [(i("g1"), i("ao")), (i("lv"), i("ao"))]

@@ -1,16 +1,16 @@
-"""Right-hand side and Jacobian of the stratified truth plant (physics §15, errata E5–E20).
+"""Right-hand side and Jacobian of the stratified truth plant (docs/model.md#truth-plant).
 
 State y = [T (n_nodes) [K], ∫S dt, ∫Q_bnd dt, ∫(H_in − H_out) dt, ∫|Q_bnd| dt,
 ∫Q_cv,rd dt, ∫Q_sol,trans dt, ∫Q_air dt, ∫Q_DA dt [J]]; the first four accumulators
-instrument the energy balance of errata E18, the last four are the room-side heat flows of
-physics §12 (Q_air by the panel's ``model.q_air_basis``, errata E2, with the temperature of
-the air actually entering the room). Per node (absolute units)
+instrument the energy balance in docs/model.md#energy-balance, the last four are the room-side heat
+flows of docs/model.md#room-heat (Q_air by the panel's ``model.q_air_basis``, docs/model.md#q-air,
+with the temperature of the air actually entering the room). Per node (absolute units)
 
     C_i dT_i/dt = Σ_links g (T_j − T_i) + Σ_inflows ṁ c_p (T_up − T_i) + S_i A_seg
 
 with convective, conductive and radiative (secant σ(T_a²+T_b²)(T_a+T_b), i.e. exact T⁴)
-links, upwind advection (errata E20: c5 δz W dT5_k/dt = ṁ c_p (T5_{k−1} − T5_k), plus the
-optional second-order correction of :mod:`dsfd.sim.plant.advection`) and the absorbed
+links, upwind advection (docs/model.md#plant-layout: c5 δz W dT5_k/dt = ṁ c_p (T5_{k−1} − T5_k),
+plus the optional second-order correction of :mod:`dsfd.sim.plant.advection`) and the absorbed
 short-wave. The airflow is solved inside every evaluation from the current stratified
 column (fully implicit coupling, :mod:`dsfd.sim.plant.flow`); the convective coefficients
 come from :mod:`dsfd.sim.plant.convection`, the Jacobian from
@@ -114,7 +114,8 @@ class PlantModel:
         self.a_l = 2.0 * lv.slat_width_m / lv.slat_pitch_m if lv else 0.0
         self.gap = geo.depth / 2 if has_louver else geo.depth
         self.h_default = np.array([getattr(cfg.parameters, k).default for k in H_NAMES])
-        # Local wind of each segment relative to the façade centre (power law, §7.2).
+        # Local wind of each segment relative to the façade centre (power law,
+        # docs/model.md#plant-heat-transfer).
         a_site, _ = TERRAIN_PROFILE[cfg.site.terrain]
         z_seg = cfg.site.facade_height_m - 0.5 * geo.height + geo.centres(n)
         self.wind_profile = (np.maximum(z_seg, 0.5) / cfg.site.facade_height_m) ** a_site
@@ -393,8 +394,8 @@ class PlantModel:
 
     def _q_air(self, m: list[float], fl: dict, face_out: float | None, m_cav: float,
                t_out: float, t_in: float) -> float:
-        """Q_air into the room [W] (errata E2) with a = ṁ cavity → room at the temperature of
-        the air leaving through IB/IT, b = ṁ room → cavity."""
+        """Q_air into the room [W] (docs/model.md#q-air) with a = ṁ cavity → room at the temperature
+        of the air leaving through IB/IT, b = ṁ room → cavity."""
         t_open = self.opening_temperatures(fl, face_out, m_cav)
         a = b = a_t = 0.0
         for k in (IB, IT):

@@ -1,8 +1,9 @@
-"""Local heat-transfer and flow-resistance correlations of the truth plant (physics §15).
+"""Local heat-transfer and flow-resistance correlations of the truth plant
+(docs/model.md#truth-plant).
 
 Pure, vectorised functions (any broadcastable arrays; SI units, kelvin). The truth plant
-multiplies each convective coefficient by a hidden multiplier (errata E16). Temperature
-differences enter through ``|ΔT|`` regularised as ``sqrt(ΔT² + δ²)`` with δ = 0.1 K, so
+multiplies each convective coefficient by a hidden multiplier (docs/model.md#true-parameters).
+Temperature differences enter through ``|ΔT|`` regularised as ``sqrt(ΔT² + δ²)`` with δ = 0.1 K, so
 every coefficient is smooth in the states (the stiff integrator needs that).
 
 References
@@ -52,12 +53,14 @@ def _abs_smooth(dt: ArrayLike) -> FloatArray:
 
 
 def air_conductivity(t_k: ArrayLike) -> FloatArray:
-    """Thermal conductivity of air k = 2.873e-3 + 7.76e-5 T [W/(m K)] (physics §7.2)."""
+    """Thermal conductivity of air k = 2.873e-3 + 7.76e-5 T [W/(m K)]
+    (docs/model.md#plant-heat-transfer)."""
     return 2.873e-3 + 7.76e-5 * np.asarray(t_k, float)
 
 
 def air_viscosity(t_k: ArrayLike) -> FloatArray:
-    """Dynamic viscosity of air μ = 3.723e-6 + 4.94e-8 T [Pa s] (physics §7.2)."""
+    """Dynamic viscosity of air μ = 3.723e-6 + 4.94e-8 T [Pa s]
+    (docs/model.md#plant-heat-transfer)."""
     return 3.723e-6 + 4.94e-8 * np.asarray(t_k, float)
 
 
@@ -80,7 +83,7 @@ def churchill_chu_vertical(dt_k: ArrayLike, t_film_k: ArrayLike, height_m: float
     -----
     Nu_H = (0.825 + 0.387 Ra^{1/6} / [1 + (0.492/Pr)^{9/16}]^{8/27})²,
     Ra = g β |ΔT| H³/(ν α), valid for all Ra; for air (Pr = 0.71) this is
-    (0.825 + 0.325 Ra^{1/6})² as in physics §15.3. h = Nu k/H.
+    (0.825 + 0.325 Ra^{1/6})² as in docs/model.md#plant-heat-transfer. h = Nu k/H.
     """
     t_f = np.asarray(t_film_k, float)
     k = air_conductivity(t_f)
@@ -114,8 +117,8 @@ def parallel_plates_developing(speed_ms: ArrayLike, x_m: ArrayLike, gap_m: float
 
         Nu = 7.55 + 0.024 G^{1.14} / (1 + 0.0358 Pr^{0.17} G^{0.64}),   G = D_h Re Pr / x
 
-    which tends to the fully developed value 7.54 (physics §15.3) far from the inlet or
-    at zero flow. h = Nu k/D_h.
+    which tends to the fully developed value 7.54 (docs/model.md#plant-heat-transfer) far from the
+    inlet or at zero flow. h = Nu k/D_h.
     """
     t = np.asarray(t_k, float)
     k = air_conductivity(t)
@@ -159,7 +162,7 @@ def doe2_exterior(dt_k: ArrayLike, wind_ms: ArrayLike, windward: ArrayLike) -> F
     dt_k : array_like, [K]
         Surface − outdoor air temperature difference.
     wind_ms : array_like, [m/s]
-        Local wind speed at the surface height (wind profile, physics §7.2).
+        Local wind speed at the surface height (wind profile, docs/model.md#plant-heat-transfer).
     windward : array_like of bool
         Wind within 100° of the surface normal.
 
@@ -184,7 +187,7 @@ def iso15099_room(t_surface_k: ArrayLike, t_air_k: ArrayLike, height_m: float,
     -----
     T_mf = T_i + ¼(T_s − T_i); Ra_H = ρ² H³ g c_p |T_s − T_i| / (T_mf μ k) with properties
     at T_mf; Nu = 0.56 Ra_H^{1/4} (laminar, the only branch reached by vertical glazing);
-    h = Nu k/H (physics §7.2).
+    h = Nu k/H (docs/model.md#plant-heat-transfer).
     """
     ts = np.asarray(t_surface_k, float)
     ti = np.asarray(t_air_k, float)
@@ -202,7 +205,7 @@ def iso15099_gap(t_a_k: ArrayLike, t_b_k: ArrayLike, gap_m: float, height_m: flo
 
     Notes
     -----
-    Ra = g β |ΔT| d³/(ν α), β = 1/T_m (physics §7.2)::
+    Ra = g β |ΔT| d³/(ν α), β = 1/T_m (docs/model.md#plant-heat-transfer)::
 
         Nu1 = 0.0673838 Ra^{1/3}               Ra > 5·10⁴
         Nu1 = 0.028154 Ra^{0.4134}             10⁴ < Ra ≤ 5·10⁴
@@ -235,8 +238,8 @@ def damper_loss_exponential(opening: ArrayLike) -> FloatArray:
 
     Notes
     -----
-    IBPSA/Modelica Buildings exponential damper (physics §8.1): ζ = exp(a + b(1 − y)) for
-    y_L ≤ y ≤ y_U with a = −1.51, b = 0.105·90, y_L = 15/90, y_U = 55/90; outside that
+    IBPSA/Modelica Buildings exponential damper (docs/model.md#plant-airflow): ζ = exp(a + b(1 − y))
+    for y_L ≤ y ≤ y_U with a = −1.51, b = 0.105·90, y_L = 15/90, y_U = 55/90; outside that
     range log ζ is interpolated linearly to ζ(1) = 0.45 and ζ(0) = 10⁶ [ENG]. The damper
     pressure drop is Δp = ζ ½ρ (Q/A_d)².
     """
@@ -265,6 +268,7 @@ def damper_loss_scalar(y: float) -> float:
 
 def lateral_open_fraction(phi_rad: ArrayLike, *, slat_width_m: float,
                           slat_pitch_m: float) -> FloatArray:
-    """Open fraction of the louver plane, max(0, 1 − (w/s)|sin φ|) [-] (errata E15)."""
+    """Open fraction of the louver plane, max(0, 1 − (w/s)|sin φ|) [-]
+    (docs/model.md#plant-layout)."""
     return np.maximum(0.0, 1.0 - slat_width_m / slat_pitch_m
                       * np.abs(np.sin(np.asarray(phi_rad, float))))

@@ -137,7 +137,7 @@ class Plant:
         x0 : array, optional, [K]
             Initial temperatures: six lumped states (replicated over the segments; x5
             for every air node) or a full node vector. Default: the lumped steady state of
-            the first step (errata E19.1).
+            the first step (docs/model.md#initial-state).
         """
         cmd = validate_command(self.cfg, command or Command(0.0, 10, 100.0),
                                or_quantum_pct=self._quantum)
@@ -319,8 +319,9 @@ class Plant:
 
     def room_heat_j(self) -> dict[str, float]:
         """Heat into the room since the reset [J]: ``q_cv_rd`` (convection and long-wave
-        from the inner pane), ``q_sol_trans`` (transmitted solar), ``q_air`` (errata E2 with
-        the panel's ``model.q_air_basis``) and ``q_da`` (daylighting benefit, physics §12.4).
+        from the inner pane), ``q_sol_trans`` (transmitted solar), ``q_air`` (docs/model.md#q-air
+        with the panel's ``model.q_air_basis``) and ``q_da`` (daylighting benefit,
+        docs/model.md#q-da).
 
         The integrals run inside the plant's ODE, so they are exact for the plant, not
         sampled; the difference of two calls is the heat of the interval between them.
@@ -329,7 +330,7 @@ class Plant:
         return {k: float(v) for k, v in zip(ROOM_FLOWS, self._y[nn + 4:nn + 8], strict=True)}
 
     def energy_balance(self) -> dict[str, float]:
-        """Energy accounting since the reset (errata E18) [J].
+        """Energy accounting since the reset (docs/model.md#energy-balance) [J].
 
         ``stored_j`` = ΔU; ``solar_j`` = ∫S_abs; ``boundary_j`` = ∫Q_bnd,in (convection and
         long-wave at the exterior and room faces); ``enthalpy_j`` = ∫(H_in − H_out);

@@ -1,7 +1,7 @@
 """Simulated sensors of the plant: thermocouples, cavity anemometer, weather station.
 
 Readings carry the canonical names of :mod:`dsfd.signals` (``x1_c`` … ``wind_dir_deg``).
-Error model (physics §15.5, errata E20), all seeded:
+Error model (docs/model.md#plant-sensors), all seeded:
 
 * thermocouples (x1..x5, room air, outdoor air): fixed bias uniform in ±0.3 K per sensor
   plus white noise σ = 0.2 K;
@@ -106,7 +106,7 @@ class SensorBank:
     rng : numpy Generator
         Draws the fixed biases at construction and the noise at every reading.
     ideal : bool
-        No bias and no noise (errata E7.16); configured faults still apply.
+        No bias and no noise (docs/model.md#plant-switches); configured faults still apply.
     """
 
     def __init__(self, config: SensorConfig, rng: np.random.Generator, *, ideal: bool) -> None:

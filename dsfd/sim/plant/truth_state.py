@@ -41,7 +41,7 @@ class TrueState:
     m_dot_kgs : ndarray (4,), [kg/s]
         Flows through EB, ET, IB, IT, positive into the cavity.
     v_cav_ms : float, [m/s]
-        Signed net upward mean cavity velocity (errata E12).
+        Signed net upward mean cavity velocity (docs/model.md#cavity-velocity).
     v_probe_ms : float, [m/s]
         The same at the anemometer height (local density).
     label : int
@@ -77,7 +77,7 @@ class TrueState:
 
 
 def realised_label(afr: int, m_dot: list[float] | np.ndarray) -> int:
-    """Label from the commanded regime and the flow direction (physics §8.3, errata E1)."""
+    """Label from the commanded regime and the flow direction (docs/model.md#regimes)."""
     if afr in PATHS:
         inlet, _, pos, neg, _ = PATHS[afr]
         return pos if m_dot[inlet] >= 0.0 else neg

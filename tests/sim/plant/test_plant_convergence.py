@@ -1,4 +1,5 @@
-"""Errata E7: the stratified plant converges in the number of segments (default options).
+"""docs/model.md#plant-switches: the stratified plant converges in the number of segments (default
+options).
 
 Mid-height x1…x5 and the outlet air may change by less than 0.1 K between N = 10 and
 N = 20 (inside-circulation and outside-circulation regimes, clear winter afternoon).

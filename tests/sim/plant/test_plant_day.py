@@ -2,15 +2,17 @@
 
 One run (default options, N = 10) serves three checks:
 
-* errata E18: |ΔU − ∫(S_abs + Q_bnd,in + H_in − H_out) dt| < 1e-3 max(∫S_abs, ∫|Q_bnd|);
+* docs/model.md#energy-balance: |ΔU − ∫(S_abs + Q_bnd,in + H_in − H_out) dt| < 1e-3 max(∫S_abs,
+  ∫|Q_bnd|);
 * the measured-data table the run produces is consistent (names, NaN-free, monotone time).
 
 A second run replays the paper's own airflow experiment, 8–11 December 2008 in Suwon
 (weather reconstructed from KMA's daily statistics, :mod:`dsfd.weather.daily`): the mean
 cavity velocity of each regime of the paper's Table 1 lies in its 2–15 cm/s range. The
-plant is the centre of the errata-E16 prior (all h multipliers 1, f_true = √(20·2000) =
-200), not fitted to the table. The velocities scale with f_true and with the stack and
-wind pressures of the weather: colder or windier days, or a small f_true, give more.
+plant is the centre of the true-parameter prior (docs/model.md#true-parameters) (all h
+multipliers 1, f_true = √(20·2000) = 200), not fitted to the table. The velocities scale with f_true
+and with the stack and wind pressures of the weather: colder or windier days, or a small f_true,
+give more.
 """
 
 from __future__ import annotations
@@ -39,7 +41,8 @@ def _prior_centre(cfg) -> TrueParameters:
 
 def test_prior_centre_is_the_geometric_centre_of_the_e16_prior(suwon):
     """The benches' nominal plant (``--prior-centre``) is the one these tests build by hand:
-    multipliers 1 and f_true = √(20·2000), the centre of E16's log-uniform range."""
+    multipliers 1 and f_true = √(20·2000), the centre of docs/model.md#true-parameters's log-uniform
+    range."""
     assert TrueParameters.prior_centre(suwon) == _prior_centre(suwon)
 
 

@@ -1,11 +1,12 @@
-"""Errata E7: the truth plant with every switch at its lumped setting IS the lumped model.
+"""docs/model.md#plant-switches: the truth plant with every switch at its lumped setting IS the
+lumped model.
 
 N = 1, split cavity off, orifice dampers, constant h's, lumped optics and forcing, ZOH
 weather, ideal actuators ...: the only remaining differences are the lumped model's own
 discretisation (exact ZOH of a network linearised at the start of each 60 s step, flows
 from the end-of-step fixed point) against the plant's continuous integration with full T⁴
-and flows inside the right-hand side. E7: max |Δ| < 0.15 K and RMS < 0.03 K over a day
-for every state, after 0.5 h.
+and flows inside the right-hand side. docs/model.md#plant-switches: max |Δ| < 0.15 K and RMS < 0.03
+K over a day for every state, after 0.5 h.
 """
 
 from __future__ import annotations
@@ -80,7 +81,7 @@ def test_plant_matches_lumped_model_over_a_day(suwon, rmis, clear_day, afr):
         0.01 * np.abs(v_lumped).mean() + 1e-9)
     if afr == 10:
         assert np.all(v == 0.0)
-    # The room-side heat (physics §12) integrated inside the plant equals the lumped
+    # The room-side heat (docs/model.md#room-heat) integrated inside the plant equals the lumped
     # model's step averages summed over the day: Q_sol,trans and Q_DA come from the same
     # optics, Q_cv,rd and Q_air from states that agree as above.
     dt = suwon.model.step_s

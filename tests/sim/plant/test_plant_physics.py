@@ -1,4 +1,5 @@
-"""Correlations of the truth plant (physics §7.2, §8.1, §15) and the fused hot path."""
+"""Correlations of the truth plant (docs/model.md#plant-heat-transfer, docs/model.md#plant-airflow,
+docs/model.md#truth-plant) and the fused hot path."""
 
 from __future__ import annotations
 
@@ -35,7 +36,7 @@ def test_churchill_chu_for_air_is_the_physics_formula():
     rho = P / (287.05 * tf)
     ra = 9.81 / tf * np.sqrt(dt**2 + 0.01) * h**3 / ((mu / rho) * k / (rho * 1006.0))
     factor = 0.387 / (1 + (0.492 / 0.71) ** (9 / 16)) ** (8 / 27)
-    assert factor == pytest.approx(0.325, abs=1e-3)  # physics §15.3 for air
+    assert factor == pytest.approx(0.325, abs=1e-3)  # docs/model.md#plant-heat-transfer for air
     expected = (0.825 + factor * ra ** (1 / 6)) ** 2 * k / h
     assert churchill_chu_vertical(dt, tf, h, P) == pytest.approx(expected, rel=1e-9)
     assert 2.0 < float(churchill_chu_vertical(10.0, 300.0, 2.5, P)) < 4.0
@@ -134,13 +135,14 @@ def test_van_albada_limiter():
 
 
 def test_pair_closed_form_equals_the_one_node_solver():
-    """Two open dampers: the closed form (E4) is the one-node solution (§8.4.4)."""
+    """Two open dampers: the closed form (docs/model.md#path-flows) is the one-node solution
+    (docs/model.md#one-node)."""
     from dsfd.sim.plant.flow import NETWORK, PAIR, FlowPiece, network_flows, pair_flow
 
     rho_b, rho_node = [1.27, 1.27, 1.19, 1.19], [1.15, 1.12, 1.15, 1.12]
     k = [60.0, 70.0, 65.0, 80.0]
     # (Inside the regularisation band, |Δp| < 0.01 Pa, the two differ by design: the path
-    # law is regularised in the path ΔP, the solver per opening — errata E10.)
+    # law is regularised in the path ΔP, the solver per opening — docs/model.md#regularisation.)
     for head in ([0.3, -33.9, 0.0, -32.2], [0.0, -34.6, 0.0, -32.2], [0.5, 0.0, 0.0, 0.1]):
         for a, b in ((0, 1), (2, 3), (2, 1), (0, 3)):
             m_ab, _ = pair_flow(FlowPiece(PAIR, a=a, b=b), head, rho_b, rho_node, k)
