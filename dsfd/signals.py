@@ -7,8 +7,8 @@ values outside it cannot be real for a façade panel in service (a broken thermo
 mis-scaled register) and are flagged by the quality checks later in the cycle. The ranges are
 deliberately wide; they catch nonsense, not unusual weather.
 
-States ``x1``..``x5`` keep the paper's names (docs/model.md#states); ``x6`` (room-side DGU surface
-node) is estimated, never measured, so it has no signal.
+States ``x1``..``x5`` keep the paper's names (docs/model.md#states); ``x6`` (the gas in the
+DGU gap) is estimated, never measured, so it has no signal.
 """
 
 from __future__ import annotations
