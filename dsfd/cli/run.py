@@ -20,8 +20,13 @@ import json
 import shutil
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from dsfd.config import ConfigError
+
+if TYPE_CHECKING:
+    from dsfd.config import PanelConfig
+    from dsfd.daemon.runner import Integration
 
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE = 0, 1, 2
 
@@ -74,6 +79,16 @@ def _check_options(args: argparse.Namespace) -> str | None:
     return None
 
 
+def _integrations(cfg: PanelConfig, config_path: Path) -> list[Integration]:
+    """What runs beside the loop: the MQTT publisher if the panel has an ``mqtt:`` section."""
+    if cfg.mqtt is None:
+        return []
+    from dsfd import __version__
+    from dsfd.integrations.mqtt import publisher_for_run
+
+    return [publisher_for_run(cfg, config_path=config_path, version=__version__)]
+
+
 def run(args: argparse.Namespace) -> int:
     from dsfd.daemon.logging_setup import configure_logging
     from dsfd.daemon.runner import RunOptions, load_for_run, resolve_state_dir, serve
@@ -96,12 +111,16 @@ def run(args: argparse.Namespace) -> int:
     try:
         cfg = load_for_run(args.config, simulated_plant=opts.simulated_plant,
                            dry_run=opts.dry_run)
+        integrations = _integrations(cfg, args.config)
         state_dir, temporary = resolve_state_dir(opts, cfg)
     except ConfigError as exc:
         print(f"dsfd run: {args.config}: configuration rejected, nothing was started",
               file=sys.stderr)
         for issue in exc.issues:
             print(f"  {issue}", file=sys.stderr)
+        return EXIT_USAGE
+    except RuntimeError as exc:  # an optional extra is missing (MissingExtraError)
+        print(f"dsfd run: {args.config}: {exc}; nothing was started", file=sys.stderr)
         return EXIT_USAGE
     plant = None
     if opts.simulated_plant:
@@ -135,7 +154,8 @@ def run(args: argparse.Namespace) -> int:
     from dsfd.storage.timeseries import SchemaTooNewError
 
     try:
-        summary = asyncio.run(serve(opts, cfg, state_dir=state_dir, plant=plant))
+        summary = asyncio.run(serve(opts, cfg, state_dir=state_dir, plant=plant,
+                                    integrations=integrations))
     except (OSError, SchemaTooNewError) as exc:  # e.g. a state directory the service user
         # cannot write, or a database of a newer dsfd (kept as it is)
         print(f"dsfd run: {exc}", file=sys.stderr)

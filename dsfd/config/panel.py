@@ -17,6 +17,7 @@ from dsfd.config.control import Control
 from dsfd.config.daemon import DaemonSettings
 from dsfd.config.devices import Devices
 from dsfd.config.loader import Problem, setting
+from dsfd.config.mqtt import Mqtt, topic_problem
 from dsfd.config.safety import Safety
 
 PARAMETER_NAMES: tuple[str, ...] = (
@@ -366,6 +367,9 @@ class PanelConfig:
     safety: Safety = setting(
         default_factory=Safety, doc="Safety pipeline before every write: safe state, wind, "
         "limits, louver move interval (dsfd.config.safety)")
+    mqtt: Mqtt | None = setting(
+        None, doc="Connection to an MQTT broker: state, Home Assistant discovery, commands; "
+        "null: none (dsfd.config.mqtt)")
 
     def check(self) -> list[Problem]:
         out = []
@@ -382,4 +386,9 @@ class PanelConfig:
             if op.area_m2 > limit:
                 out.append(Problem(f"openings.{name}.area_m2", op.area_m2,
                                    f"larger than the panel face {limit:.3g} m2"))
+        mq = self.mqtt
+        if mq is not None and mq.base_topic is None and (why := topic_problem(
+                mq.base_topic_for(self.panel.id))):
+            out.append(Problem("mqtt.base_topic", None, f"the default dsfd/<panel id> "
+                               f"({mq.base_topic_for(self.panel.id)!r}) {why}: set it"))
         return out

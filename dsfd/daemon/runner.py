@@ -19,7 +19,7 @@ import dataclasses
 import os
 import signal
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Protocol
@@ -43,7 +43,8 @@ from dsfd.physics.model import LumpedModel
 from dsfd.signals import ACTUATOR_NAMES
 from dsfd.storage.timeseries import Store
 
-__all__ = ["PlantUnderTest", "RunOptions", "load_for_run", "runtime_problems", "serve"]
+__all__ = ["Integration", "PlantUnderTest", "RunOptions", "load_for_run", "runtime_problems",
+           "serve"]
 
 log = get_logger("dsfd.daemon")
 
@@ -67,6 +68,24 @@ class PlantUnderTest(Protocol):
     def room_heat(self) -> tuple[dict[str, float], float]:
         """Heat into the room since the start [J] by term, and the hours it covers."""
         ...
+
+
+class Integration(Protocol):
+    """Something beside the loop that reads what the daemon stores (the MQTT publisher).
+
+    The CLI builds it and hands it to :func:`serve` (the daemon does not import the
+    integrations). It is started once the database is open, told after every stored cycle
+    (:meth:`cycle_stored` must return at once: it runs on the loop) and stopped before the
+    database closes (:meth:`stop` is bounded in time).
+    """
+
+    name: str
+
+    def start(self, *, database: Path) -> None: ...
+
+    def cycle_stored(self, cycle: int) -> None: ...
+
+    def stop(self) -> None: ...
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -169,9 +188,11 @@ def resolve_state_dir(opts: RunOptions, cfg: PanelConfig) -> tuple[Path, bool]:
 
 class _Daemon:
     def __init__(self, opts: RunOptions, cfg: PanelConfig, clock: Clock, driver: Driver,
-                 store: Store, controller: Controller, notifier: Notifier) -> None:
+                 store: Store, controller: Controller, notifier: Notifier,
+                 integrations: Sequence[Integration] = ()) -> None:
         self.opts, self.cfg, self.clock, self.driver = opts, cfg, clock, driver
         self.store, self.controller, self.notifier = store, controller, notifier
+        self.integrations = tuple(integrations)
         self.stop = asyncio.Event()
         self.reload = asyncio.Event()
         self.summary = RunSummary(panel=cfg.panel.id, mode=opts.mode)
@@ -219,6 +240,9 @@ class _Daemon:
             log.exception("cycle failed")
             return
         self.summary.add(out)
+        if out.store_ok:
+            for integration in self.integrations:
+                integration.cycle_stored(out.cycle)
         if self.opts.on_cycle is not None:
             self.opts.on_cycle(out)
         c = out.command
@@ -260,10 +284,12 @@ class _Daemon:
         kept = [key for key, changed in (
             ("devices", new.devices != self.cfg.devices),
             ("daemon.state_directory",
-             new.daemon.state_directory != self.cfg.daemon.state_directory)) if changed]
+             new.daemon.state_directory != self.cfg.daemon.state_directory),
+            ("mqtt", new.mqtt != self.cfg.mqtt)) if changed]
         if kept:
             log.warning("reload: %s changed; restart the service to apply", ", ".join(kept))
-            new = dataclasses.replace(new, devices=self.cfg.devices, daemon=dataclasses.replace(
+            new = dataclasses.replace(new, devices=self.cfg.devices, mqtt=self.cfg.mqtt,
+                                      daemon=dataclasses.replace(
                 new.daemon, state_directory=self.cfg.daemon.state_directory))
         note = self.controller.reconfigure(new)
         self.cfg = new
@@ -297,11 +323,13 @@ def limit_malloc_arenas(arenas: int = 1) -> bool:
 
 async def serve(opts: RunOptions, cfg: PanelConfig, *, state_dir: Path,
                 plant: PlantUnderTest | None = None,
+                integrations: Sequence[Integration] = (),
                 print_line: Callable[[str], None] = print) -> RunSummary:
     """Run the daemon until the cycles are done or a signal stops it; return the summary.
 
     ``plant`` is the simulated plant of ``--plant sim`` (its driver replaces the devices and
     the clock starts at its start); without it the panel's ``devices:`` are opened.
+    ``integrations`` (the MQTT publisher) run beside the loop, fed from the database.
     """
     limit_malloc_arenas()
     bind_contextvars(panel=cfg.panel.id)
@@ -334,14 +362,18 @@ async def serve(opts: RunOptions, cfg: PanelConfig, *, state_dir: Path,
     write_enabled = not opts.dry_run or not getattr(driver, "hardware", True)
     controller = Controller(cfg, driver=driver, clock=clock, store=store,
                             calibration=calibration, write_enabled=write_enabled)
-    daemon = _Daemon(opts, cfg, clock, driver, store, controller, notifier)
+    daemon = _Daemon(opts, cfg, clock, driver, store, controller, notifier, integrations)
     daemon.summary.start_calibration(calibration)
     loop = asyncio.get_running_loop()
     loop.add_signal_handler(signal.SIGTERM, daemon.stop.set)
     loop.add_signal_handler(signal.SIGINT, daemon.stop.set)
     loop.add_signal_handler(signal.SIGHUP, daemon.reload.set)
     reason = "error"
+    started: list[Integration] = []
     try:
+        for integration in integrations:
+            integration.start(database=store.path)
+            started.append(integration)
         await driver.start()
         notifier.ready(f"controlling panel {cfg.panel.id} ({opts.mode})")
         log.info("daemon ready", mode=opts.mode, state_dir=str(state_dir),
@@ -355,6 +387,11 @@ async def serve(opts: RunOptions, cfg: PanelConfig, *, state_dir: Path,
         try:
             await driver.close()
         finally:
+            for integration in started:
+                try:
+                    await asyncio.to_thread(integration.stop)
+                except Exception:
+                    log.exception("stopping %s failed", integration.name)
             store.close()
             notifier.close()
     heat, hours = (None, 0.0) if plant is None else plant.room_heat()

@@ -33,6 +33,7 @@ from dsfd.config.panel import PARAMETER_NAMES
 __all__ = [
     "DB_NAME",
     "MIGRATIONS",
+    "MQTT_CURSOR_TABLE",
     "SCHEMA_VERSION",
     "CycleRecord",
     "SchemaTooNewError",
@@ -40,14 +41,36 @@ __all__ = [
 ]
 
 DB_NAME = "timeseries.sqlite"
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
 #: Schema changes, in order: ``MIGRATIONS[v]`` is the SQL script that takes a database of
 #: version ``v - 1`` to ``v`` (``ALTER TABLE … ADD COLUMN``; new tables come from
 #: :data:`SCHEMA`, whose ``CREATE … IF NOT EXISTS`` always describes the newest version).
 #: To change the schema: add the columns to SCHEMA, add a step here, raise SCHEMA_VERSION,
 #: and describe it in docs/storage-schema.md.
-MIGRATIONS: dict[int, str] = {}
 BUSY_TIMEOUT_MS = 5000
+
+#: Delivery state of the MQTT publisher (dsfd.integrations.mqtt), one row per destination
+#: (broker and base topic): the last state message the broker acknowledged, and the broker's
+#: state for ``dsfd status``. Written by the publisher's thread, never by the cycle.
+MQTT_CURSOR_TABLE = """
+CREATE TABLE IF NOT EXISTS mqtt_cursor (
+    destination TEXT PRIMARY KEY,
+    run_id INTEGER NOT NULL DEFAULT 0,
+    cycle INTEGER NOT NULL DEFAULT 0,
+    time_s REAL,
+    connected INTEGER NOT NULL DEFAULT 0,
+    last_error TEXT NOT NULL DEFAULT '',
+    last_error_utc TEXT,
+    backlog INTEGER NOT NULL DEFAULT 0,
+    delivered INTEGER NOT NULL DEFAULT 0,
+    expired INTEGER NOT NULL DEFAULT 0,
+    kpi_day TEXT,
+    updated_utc TEXT NOT NULL
+);
+"""
+MIGRATIONS: dict[int, str] = {
+    2: MQTT_CURSOR_TABLE,  # the MQTT delivery cursor and broker state (issue 22)
+}
 
 _PARAM_COLUMNS = ", ".join(f"{name} REAL" for name in PARAMETER_NAMES)
 SCHEMA = f"""
@@ -123,7 +146,7 @@ CREATE TABLE IF NOT EXISTS events (
     kind TEXT NOT NULL,
     message TEXT NOT NULL
 );
-"""
+""" + MQTT_CURSOR_TABLE
 
 
 class SchemaTooNewError(RuntimeError):

@@ -1,0 +1,5 @@
+"""Integrations at the edge: they read what the daemon stores and never sit on the cycle's path.
+
+* :mod:`dsfd.integrations.mqtt` — state, daily KPIs and Home Assistant discovery over MQTT,
+  and the ``dsfd fleet`` view.
+"""

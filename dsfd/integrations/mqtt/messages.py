@@ -1,0 +1,301 @@
+"""The JSON a panel publishes: per-cycle state, daily KPIs, Home Assistant discovery configs.
+
+Pure functions over rows the daemon stored (no I/O): :mod:`dsfd.integrations.mqtt.outbox`
+reads the rows, :mod:`dsfd.integrations.mqtt.publisher` sends the results.
+
+Topics under the panel's base topic ``<base>`` (default ``dsfd/<panel id>``):
+
+=====================  ========  ======  =====================================================
+topic                  retained  QoS     payload
+=====================  ========  ======  =====================================================
+``<base>/state``       yes       1       one JSON object per cycle (:func:`state_message`)
+``<base>/availability`` yes      1       ``online`` / ``offline`` (also the last will)
+``<base>/kpi``         yes       1       the last completed local day (:func:`daily_kpis`)
+``<base>/cmd/...``     —         —       commands (regime, louver_deg, damper_pct, resume)
+=====================  ========  ======  =====================================================
+
+Home Assistant discovery follows the documented schema (home-assistant.io/integrations/mqtt,
+"MQTT Discovery", and the pages of the MQTT sensor, binary sensor, select, number and button
+platforms):
+
+* config topic ``<discovery_prefix>/<component>/<object_id>/config``, retained; the object ID
+  uses only ``[a-zA-Z0-9_-]`` and equals the entity's ``unique_id`` (the documented best
+  practice, without a node ID);
+* every config carries ``unique_id``, a ``device`` block (``identifiers`` list, ``name``,
+  ``manufacturer``, ``model``, ``sw_version``) that groups the entities as one device per
+  panel, an ``origin`` block (``name``, ``sw_version``) and ``availability_topic`` (default
+  payloads ``online``/``offline``);
+* sensors read ``state_topic`` with a ``value_template`` over ``value_json``; a value the
+  panel does not have renders as ``None``, which the MQTT platforms take as *unknown*;
+  ``device_class`` and ``unit_of_measurement`` are pairs Home Assistant accepts
+  (``homeassistant/components/sensor/const.py``, ``DEVICE_CLASS_UNITS``): temperature °C,
+  speed m/s, power W, irradiance W/m², duration ms/s; ``state_class: measurement``;
+* the faults ``binary_sensor`` has ``device_class: problem`` and compares the rendered
+  template with ``payload_on``/``payload_off``;
+* the regime ``select`` needs ``command_topic`` and ``options``; the louver and damper
+  ``number`` entities have ``command_topic``, ``min``, ``max``, ``step`` and ``mode``; the
+  resume ``button`` has ``command_topic`` and ``payload_press``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from collections.abc import Iterable, Mapping, Sequence
+from datetime import UTC, date, datetime, timedelta
+from typing import Any
+
+import numpy as np
+
+from dsfd.config import PanelConfig
+from dsfd.daemon.summary import REGIME_NAMES
+from dsfd.signals import SENSOR_NAMES
+
+__all__ = [
+    "COMMAND_TOPICS",
+    "HEAT_TERMS",
+    "daily_kpis",
+    "discovery_configs",
+    "dumps",
+    "local_day",
+    "object_id",
+    "regime_option",
+    "state_message",
+]
+
+#: Room-side heat terms of the model (issue 21 stores them; until then they are null) [W].
+HEAT_TERMS: tuple[str, ...] = ("q_sol_trans", "q_cv_rd", "q_air", "q_da")
+#: Command topics under ``<base>/cmd/`` that the discovery configs point at.
+COMMAND_TOPICS: tuple[str, ...] = ("regime", "louver_deg", "damper_pct", "resume", "override",
+                                   "mode")
+GOOD = "good"
+
+
+def dumps(message: Mapping[str, Any]) -> str:
+    """Compact JSON with NaN/inf as null (JSON has neither)."""
+    return json.dumps(_finite(message), separators=(",", ":"), ensure_ascii=False)
+
+
+def _finite(value: Any) -> Any:
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, Mapping):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_finite(v) for v in value]
+    return value
+
+
+def regime_option(afr: int) -> str:
+    """The regime as a select option: ``"3: outdoor air curtain up"``."""
+    return f"{afr}: {REGIME_NAMES.get(afr, 'unknown')}"
+
+
+# --------------------------------------------------------------------------- state
+def state_message(panel_id: str, row: Mapping[str, Any],
+                  samples: Mapping[str, tuple[float | None, str]], *,
+                  calibrated_s: float | None) -> dict[str, Any]:
+    """The state of one stored cycle.
+
+    Parameters
+    ----------
+    panel_id : str
+    row : mapping
+        The cycle's ``decisions`` row with the run's ``mode`` (docs/storage-schema.md).
+    samples : mapping
+        Signal → (value as delivered, quality) of the cycle's ``samples`` rows.
+    calibrated_s : float or None
+        Time of the newest on-line calibration update at or before the cycle [s, UTC].
+    """
+    method = str(row["method"])
+    trace = _json_list(row.get("trace"))
+    wind_set = any(t.get("stage") == "wind" and t.get("set") for t in trace)
+    flagged = {n: q for n, (_, q) in sorted(samples.items()) if q != GOOD}
+    faults = [f"{name}: {quality}" for name, quality in flagged.items()]
+    if method == "safe":
+        faults.append(f"safe state: {row.get('fallback_reason') or 'fault signal not GOOD'}")
+    if row.get("write_status") == "failed":
+        faults.append("write failed")
+    afr = int(row["afr"])
+    heating = row.get("heating")
+    timings = _json_dict(row.get("timings_ms"))
+    time_s = float(row["time_s"])
+    return {
+        "panel": panel_id, "run": int(row["run_id"]), "cycle": int(row["cycle"]),
+        "slot": int(row["slot"]), "time_utc": row["time_utc"], "time_s": time_s,
+        "mode": row.get("mode"),
+        "objective": None if heating is None else ("heating" if heating else "cooling"),
+        "set_by": "wind" if wind_set and method != "safe" else method,
+        "method": method,
+        "command": {"louver_deg": float(row["phi_deg"]), "regime": afr,
+                    "regime_name": REGIME_NAMES.get(afr), "regime_option": regime_option(afr),
+                    "damper_pct": float(row["or_pct"])},
+        "write": row.get("write_status"),
+        # Operator holds arrive with issue 20; the fields are here so consumers need no change.
+        "hold": None, "hold_source": None, "hold_until_utc": None,
+        "measured": {n: (v if q == GOOD and v is not None else None)
+                     for n, (v, q) in samples.items() if n in _SENSOR_SET},
+        "flagged": flagged,
+        "fault": bool(faults), "faults": faults,
+        "estimate": None,
+        "heat_w": dict.fromkeys(HEAT_TERMS),
+        "decision_ms": timings.get("decide"),
+        "cycle_ms": _float(row.get("cycle_ms")),
+        "calibration_age_s": None if calibrated_s is None else max(time_s - calibrated_s, 0.0),
+        "fallback": row.get("fallback_reason") or None,
+    }
+
+
+_SENSOR_SET = frozenset(SENSOR_NAMES)
+
+
+def _json_list(text: Any) -> list[dict[str, Any]]:
+    try:
+        value = json.loads(text) if isinstance(text, str) else text
+    except ValueError:
+        return []
+    return [v for v in value if isinstance(v, dict)] if isinstance(value, list) else []
+
+
+def _json_dict(text: Any) -> dict[str, Any]:
+    try:
+        value = json.loads(text) if isinstance(text, str) else text
+    except ValueError:
+        return {}
+    return value if isinstance(value, dict) else {}
+
+
+def _float(value: Any) -> float | None:
+    return None if value is None else float(value)
+
+
+# --------------------------------------------------------------------------- KPIs
+def local_day(time_s: float, utc_offset_h: float) -> date:
+    """The panel's local (standard time) calendar day of a UTC time [s]."""
+    return datetime.fromtimestamp(time_s + utc_offset_h * 3600.0, UTC).date()
+
+
+def day_bounds_s(day: date, utc_offset_h: float) -> tuple[float, float]:
+    """UTC start and end [s] of a local day."""
+    start = datetime(day.year, day.month, day.day, tzinfo=UTC).timestamp() \
+        - utc_offset_h * 3600.0
+    return start, start + 86400.0
+
+
+def daily_kpis(panel_id: str, day: date, rows: Sequence[Mapping[str, Any]], *,
+               utc_offset_h: float, flagged_samples: int, calibration_updates: int
+               ) -> dict[str, Any]:
+    """Key figures of one local day from its ``decisions`` rows in cycle order."""
+    methods: dict[str, int] = {}
+    for r in rows:
+        methods[str(r["method"])] = methods.get(str(r["method"]), 0) + 1
+    decide = np.array([v for r in rows if (v := _json_dict(r.get("timings_ms")).get("decide"))
+                       is not None], float)
+    return {
+        "panel": panel_id, "day": day.isoformat(), "utc_offset_h": utc_offset_h,
+        "cycles": len(rows), "cycles_by_method": dict(sorted(methods.items())),
+        "louver_moves": _changes(r["phi_deg"] for r in rows),
+        "regime_changes": _changes(r["afr"] for r in rows),
+        "damper_moves": _changes(r["or_pct"] for r in rows),
+        "write_failures": sum(r.get("write_status") == "failed" for r in rows),
+        "skipped_slots": sum(int(r.get("skipped_slots") or 0) for r in rows),
+        "flagged_samples": flagged_samples,
+        "calibration_updates": calibration_updates,
+        "decision_ms_p50": float(np.percentile(decide, 50)) if decide.size else None,
+        "decision_ms_p99": float(np.percentile(decide, 99)) if decide.size else None,
+        "heat_kwh": dict.fromkeys(HEAT_TERMS),
+    }
+
+
+def _changes(values: Iterable[Any]) -> int:
+    out, last = 0, None
+    for v in values:
+        if last is not None and v != last:
+            out += 1
+        last = v
+    return out
+
+
+# --------------------------------------------------------------------------- discovery
+_OBJECT_ID = re.compile(r"[^A-Za-z0-9_-]")
+
+
+def object_id(panel_id: str, key: str) -> str:
+    """Discovery object ID and unique_id of one entity: ``dsfd_<panel>_<key>``."""
+    return _OBJECT_ID.sub("_", f"dsfd_{panel_id}_{key}")
+
+
+#: (key, name, template path, device_class, unit) of the numeric sensors.
+_SENSORS: tuple[tuple[str, str, str, str | None, str], ...] = (
+    ("x1", "Exterior pane (x1)", "measured.x1_c", "temperature", "°C"),
+    ("x2", "Interior DGU outer pane (x2)", "measured.x2_c", "temperature", "°C"),
+    ("x3", "Interior DGU inner pane (x3)", "measured.x3_c", "temperature", "°C"),
+    ("x4", "Louver slat (x4)", "measured.x4_c", "temperature", "°C"),
+    ("x5", "Cavity air (x5)", "measured.x5_c", "temperature", "°C"),
+    ("v_cav", "Cavity air speed", "measured.v_cav_ms", "speed", "m/s"),
+    ("t_out", "Outdoor air", "measured.t_out_c", "temperature", "°C"),
+    ("ghi", "Global horizontal irradiance", "measured.ghi_wm2", "irradiance", "W/m²"),
+    ("q_sol_trans", "Solar heat transmitted", "heat_w.q_sol_trans", "power", "W"),
+    ("q_cv_rd", "Convective and long-wave heat", "heat_w.q_cv_rd", "power", "W"),
+    ("q_air", "Ventilation air heat", "heat_w.q_air", "power", "W"),
+    ("q_da", "Daylight credit", "heat_w.q_da", "power", "W"),
+    ("decision_time", "Decision time", "decision_ms", "duration", "ms"),
+    ("calibration_age", "Calibration age", "calibration_age_s", "duration", "s"),
+)
+
+
+def discovery_configs(cfg: PanelConfig, *, base_topic: str, discovery_prefix: str,
+                      version: str) -> list[tuple[str, dict[str, Any]]]:
+    """(config topic, payload) of every entity of the panel's Home Assistant device."""
+    pid = cfg.panel.id
+    state = f"{base_topic}/state"
+    common: dict[str, Any] = {
+        "availability_topic": f"{base_topic}/availability",
+        "payload_available": "online", "payload_not_available": "offline",
+        "device": {"identifiers": [object_id(pid, "panel")],
+                   "name": f"DSF panel {pid}", "manufacturer": "dsfd",
+                   "model": "double-skin façade panel (MPC)", "sw_version": version},
+        "origin": {"name": "dsfd", "sw_version": version},
+    }
+    out: list[tuple[str, dict[str, Any]]] = []
+
+    def add(component: str, key: str, name: str, **fields: Any) -> None:
+        uid = object_id(pid, key)
+        out.append((f"{discovery_prefix}/{component}/{uid}/config",
+                    {"name": name, "unique_id": uid, **fields, **common}))
+
+    for key, name, path, device_class, unit in _SENSORS:
+        add("sensor", key, name, state_topic=state, value_template=f"{{{{ value_json.{path} }}}}",
+            device_class=device_class, unit_of_measurement=unit, state_class="measurement")
+    add("sensor", "set_by", "Command set by", state_topic=state,
+        value_template="{{ value_json.set_by }}", icon="mdi:account-cog")
+    add("binary_sensor", "fault", "Fault", state_topic=state, device_class="problem",
+        value_template="{{ value_json.fault }}", payload_on="True", payload_off="False",
+        json_attributes_topic=state,
+        json_attributes_template="{{ {'faults': value_json.faults} | tojson }}")
+    cmd = f"{base_topic}/cmd"
+    add("select", "regime", "Airflow regime", state_topic=state,
+        value_template="{{ value_json.command.regime_option }}", command_topic=f"{cmd}/regime",
+        options=[regime_option(r) for r in cfg.openings.available_regimes()], qos=1,
+        retain=False)
+    s = cfg.safety
+    if cfg.louver is not None:
+        angles = [a for a in cfg.louver.angles_deg()
+                  if s.phi_min_deg - 1e-9 <= a <= s.phi_max_deg + 1e-9]
+        add("number", "louver", "Louver angle", state_topic=state,
+            value_template="{{ value_json.command.louver_deg }}",
+            command_topic=f"{cmd}/louver_deg", min=min(angles), max=max(angles),
+            step=cfg.louver.step_deg, mode="box", unit_of_measurement="°", qos=1, retain=False)
+    add("number", "damper", "Damper opening", state_topic=state,
+        value_template="{{ value_json.command.damper_pct }}", command_topic=f"{cmd}/damper_pct",
+        min=0.0, max=s.or_max_pct, step=s.or_step_pct, mode="box", unit_of_measurement="%",
+        qos=1, retain=False)
+    add("button", "resume", "Resume automatic control", command_topic=f"{cmd}/resume",
+        payload_press="resume", qos=1, retain=False)
+    return out
+
+
+def utc_iso(time_s: float) -> str:
+    return (datetime(1970, 1, 1, tzinfo=UTC) + timedelta(seconds=time_s)).strftime(
+        "%Y-%m-%dT%H:%M:%SZ")

@@ -1,0 +1,183 @@
+"""The daemon's database seen as the MQTT publisher's outbox.
+
+State messages are not queued in memory: every stored cycle is already in ``decisions`` and
+``samples`` (docs/storage-schema.md). The publisher reads the cycles after its delivery cursor
+in order — ``(run_id, cycle)``, the order they were stored — and moves the cursor in the
+``mqtt_cursor`` table when the broker has acknowledged them (QoS 1). A broker outage or a
+daemon restart therefore loses nothing: the backlog is whatever lies after the cursor,
+bounded by ``mqtt.backlog_max_age_h`` relative to the newest stored cycle.
+
+Used only by the publisher's thread, through its own SQLite connection (WAL: reading never
+blocks the daemon's writes; the cursor is written in short transactions, at most every
+few seconds).
+"""
+
+from __future__ import annotations
+
+import sqlite3
+from collections.abc import Mapping
+from dataclasses import dataclass
+from datetime import date
+from pathlib import Path
+from typing import Any
+
+from dsfd.integrations.mqtt.messages import day_bounds_s
+from dsfd.storage.timeseries import BUSY_TIMEOUT_MS, iso_now
+
+__all__ = ["Key", "Outbox", "PendingCycle", "Status"]
+
+#: A cycle's place in the outbox: (run_id, cycle).
+Key = tuple[int, int]
+
+_DECISION_COLUMNS = ("run_id, cycle, slot, time_s, time_utc, method, fallback_reason, heating, "
+                     "phi_deg, afr, or_pct, write_status, trace, timings_ms, cycle_ms, "
+                     "skipped_slots")
+
+
+@dataclass(frozen=True)
+class PendingCycle:
+    """One stored cycle to publish: its decisions row (with the run's mode) and samples."""
+
+    key: Key
+    row: Mapping[str, Any]
+    samples: Mapping[str, tuple[float | None, str]]
+    calibrated_s: float | None
+
+
+@dataclass
+class Status:
+    """The publisher's view of the broker (saved with the cursor; ``dsfd status`` reads it)."""
+
+    connected: bool = False
+    last_error: str = ""
+    last_error_utc: str | None = None
+    backlog: int = 0
+    delivered: int = 0
+    expired: int = 0
+    kpi_day: str | None = None
+
+
+class Outbox:
+    """Cursor and backlog of one destination (``host:port base_topic``) in the database."""
+
+    def __init__(self, conn: sqlite3.Connection, destination: str) -> None:
+        self.conn = conn
+        self.destination = destination
+
+    @classmethod
+    def open(cls, database: Path, destination: str) -> Outbox:
+        conn = sqlite3.connect(database, timeout=BUSY_TIMEOUT_MS / 1000,
+                               isolation_level=None)  # autocommit: each write its own txn
+        conn.execute(f"PRAGMA busy_timeout = {BUSY_TIMEOUT_MS}")
+        conn.row_factory = sqlite3.Row
+        return cls(conn, destination)
+
+    def close(self) -> None:
+        self.conn.close()
+
+    # ------------------------------------------------------------------ cursor
+    def cursor(self) -> tuple[Key, Status]:
+        """The acknowledged position and the saved counters (zero for a new destination)."""
+        row = self.conn.execute(
+            "SELECT run_id, cycle, delivered, expired, kpi_day FROM mqtt_cursor "
+            "WHERE destination = ?", (self.destination,)).fetchone()
+        if row is None:
+            return (0, 0), Status()
+        return (int(row["run_id"]), int(row["cycle"])), Status(
+            delivered=int(row["delivered"]), expired=int(row["expired"]),
+            kpi_day=row["kpi_day"])
+
+    def save(self, acked: Key, status: Status, *, time_s: float | None) -> None:
+        """Write the cursor and the broker state (one short transaction)."""
+        self.conn.execute(
+            "INSERT INTO mqtt_cursor (destination, run_id, cycle, time_s, connected, "
+            "last_error, last_error_utc, backlog, delivered, expired, kpi_day, updated_utc) "
+            "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) ON CONFLICT (destination) DO UPDATE "
+            "SET run_id = excluded.run_id, cycle = excluded.cycle, "
+            "time_s = COALESCE(excluded.time_s, time_s), connected = excluded.connected, "
+            "last_error = excluded.last_error, last_error_utc = excluded.last_error_utc, "
+            "backlog = excluded.backlog, delivered = excluded.delivered, "
+            "expired = excluded.expired, kpi_day = excluded.kpi_day, "
+            "updated_utc = excluded.updated_utc",
+            (self.destination, *acked, time_s, int(status.connected), status.last_error,
+             status.last_error_utc, status.backlog, status.delivered, status.expired,
+             status.kpi_day, iso_now()))
+
+    # ------------------------------------------------------------------ backlog
+    def newest_time_s(self) -> float | None:
+        row = self.conn.execute("SELECT MAX(time_s) FROM decisions").fetchone()
+        return None if row[0] is None else float(row[0])
+
+    def oldest_allowed_s(self, max_age_s: float) -> float | None:
+        newest = self.newest_time_s()
+        return None if newest is None else newest - max_age_s
+
+    def backlog(self, after: Key, *, max_age_s: float) -> int:
+        """Stored cycles after ``after`` that are young enough to be sent."""
+        oldest = self.oldest_allowed_s(max_age_s)
+        if oldest is None:
+            return 0
+        return int(self.conn.execute(
+            "SELECT COUNT(*) FROM decisions WHERE (run_id, cycle) > (?, ?) AND time_s >= ?",
+            (*after, oldest)).fetchone()[0])
+
+    def pending(self, after: Key, *, limit: int, max_age_s: float
+                ) -> tuple[list[PendingCycle], int, Key | None]:
+        """Up to ``limit`` cycles after ``after`` in stored order, young enough to send.
+
+        Returns the cycles, how many older ones were passed over, and the position just
+        before the first returned cycle when some were passed over (else None).
+        """
+        oldest = self.oldest_allowed_s(max_age_s)
+        if oldest is None or limit <= 0:
+            return [], 0, None
+        rows = self.conn.execute(
+            f"SELECT {_DECISION_COLUMNS}, runs.mode AS mode FROM decisions "
+            "JOIN runs USING (run_id) WHERE (run_id, cycle) > (?, ?) AND time_s >= ? "
+            "ORDER BY run_id, cycle LIMIT ?", (*after, oldest, limit)).fetchall()
+        if not rows:
+            return [], 0, None
+        first: Key = (int(rows[0]["run_id"]), int(rows[0]["cycle"]))
+        skipped = int(self.conn.execute(
+            "SELECT COUNT(*) FROM decisions WHERE (run_id, cycle) > (?, ?) "
+            "AND (run_id, cycle) < (?, ?)", (*after, *first)).fetchone()[0])
+        samples = self._samples(rows)
+        out = []
+        for r in rows:
+            key = (int(r["run_id"]), int(r["cycle"]))
+            out.append(PendingCycle(key, dict(r), samples.get(key, {}),
+                                    self._calibrated_s(float(r["time_s"]))))
+        return out, skipped, ((first[0], first[1] - 1) if skipped else None)
+
+    def _samples(self, rows: list[sqlite3.Row]
+                 ) -> dict[Key, dict[str, tuple[float | None, str]]]:
+        out: dict[Key, dict[str, tuple[float | None, str]]] = {}
+        by_run: dict[int, list[int]] = {}
+        for r in rows:
+            by_run.setdefault(int(r["run_id"]), []).append(int(r["cycle"]))
+        for run, cycles in by_run.items():
+            for cycle, signal, value, quality in self.conn.execute(
+                    "SELECT cycle, signal, value, quality FROM samples WHERE run_id = ? "
+                    "AND cycle BETWEEN ? AND ?", (run, min(cycles), max(cycles))):
+                out.setdefault((run, int(cycle)), {})[signal] = (value, quality)
+        return out
+
+    def _calibrated_s(self, time_s: float) -> float | None:
+        row = self.conn.execute("SELECT MAX(time_s) FROM parameters WHERE source = 'online' "
+                                "AND time_s <= ?", (time_s,)).fetchone()
+        return None if row[0] is None else float(row[0])
+
+    # ------------------------------------------------------------------ KPIs
+    def day_rows(self, day: date, utc_offset_h: float) -> tuple[list[dict[str, Any]], int, int]:
+        """A local day's decisions rows in stored order, its flagged samples and updates."""
+        start, end = day_bounds_s(day, utc_offset_h)
+        rows = [dict(r) for r in self.conn.execute(
+            f"SELECT {_DECISION_COLUMNS} FROM decisions WHERE time_s >= ? AND time_s < ? "
+            "ORDER BY run_id, cycle", (start, end))]
+        flagged = self.conn.execute(
+            "SELECT COUNT(*) FROM samples WHERE time_s >= ? AND time_s < ? "
+            "AND quality != 'good'", (start, end)).fetchone()[0]
+        updates = self.conn.execute(
+            "SELECT COUNT(*) FROM parameters WHERE source = 'online' AND time_s >= ? "
+            "AND time_s < ?", (start, end)).fetchone()[0]
+        return rows, int(flagged), int(updates)

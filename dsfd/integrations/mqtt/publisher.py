@@ -1,0 +1,355 @@
+"""The MQTT publisher of one panel: a thread beside the control loop, fed from the database.
+
+The loop never waits for it. After each stored cycle the runner calls
+:meth:`MqttPublisher.cycle_stored`, which only sets an event; the publisher's own thread then
+reads the new cycles from the database (:class:`~dsfd.integrations.mqtt.outbox.Outbox`) and
+hands them to paho-mqtt's network thread (``loop_start``). A slow, absent or refusing broker
+costs the loop nothing.
+
+Delivery: every state message goes out with QoS 1 and the retain flag; at most
+:data:`WINDOW` are unacknowledged at a time. The delivery cursor in ``mqtt_cursor`` moves to
+the last cycle whose PUBACK arrived with all before it acknowledged too. When the connection
+drops, the unacknowledged ones are sent again, in order, on the next connection (QoS-1
+redelivery: a subscriber may see a cycle twice, never a gap); after a daemon restart the
+same happens from the saved cursor. Cycles older than ``mqtt.backlog_max_age_h`` (relative to
+the newest stored cycle) are passed over and counted as expired.
+
+Connection: a fresh paho client per attempt with the last will ``<base>/availability`` =
+``offline`` (retained); on CONNACK it publishes ``online`` (retained), the Home Assistant
+discovery configs (retained) and the last day's KPIs. Failed attempts back off
+exponentially with jitter (:class:`~dsfd.integrations.mqtt.link.Backoff`). Each change of the
+broker's state is logged once and saved in ``mqtt_cursor`` (connected, last error, backlog,
+delivered, expired) for ``dsfd status``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import contextvars
+import queue
+import threading
+import time
+from collections import OrderedDict
+from datetime import timedelta
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from dsfd.config import PanelConfig
+from dsfd.daemon.logging_setup import get_logger
+from dsfd.integrations.mqtt.link import Backoff, BrokerLink, new_client, reason_text, settings_of
+from dsfd.integrations.mqtt.messages import (
+    daily_kpis,
+    discovery_configs,
+    dumps,
+    local_day,
+    state_message,
+)
+from dsfd.integrations.mqtt.outbox import Key, Outbox, Status
+from dsfd.storage.timeseries import iso_now
+
+if TYPE_CHECKING:
+    from paho.mqtt.client import Client
+
+__all__ = ["WINDOW", "MqttPublisher"]
+
+log = get_logger("dsfd.mqtt")
+
+#: State messages in flight (published, PUBACK not yet received) at most.
+WINDOW = 100
+#: The cursor and the broker state are saved at most this often while messages flow [s].
+SAVE_EVERY_S = 2.0
+#: How long to wait for the CONNACK after the TCP connection is up [s].
+CONNACK_WAIT_S = 10.0
+
+
+class _Connection:
+    """One connection attempt: the paho client and what its callbacks report."""
+
+    def __init__(self, client: Client, wake: threading.Event) -> None:
+        self.client = client
+        self.connack = threading.Event()
+        self.lost = threading.Event()
+        self.refused: str = ""
+        self.lost_reason: str = ""
+        self.acks: queue.SimpleQueue[int] = queue.SimpleQueue()
+        client.on_connect = self._on_connect
+        client.on_disconnect = self._on_disconnect
+        client.on_publish = self._on_publish
+        self._wake = wake
+
+    # paho's network thread calls these (CallbackAPIVersion.VERSION2 signatures)
+    def _on_connect(self, _c: Any, _u: Any, _flags: Any, reason_code: Any, _p: Any) -> None:
+        if reason_code.is_failure:
+            self.refused = reason_text(reason_code)
+        self.connack.set()
+
+    def _on_disconnect(self, _c: Any, _u: Any, _flags: Any, reason_code: Any, _p: Any) -> None:
+        self.lost_reason = reason_text(reason_code)
+        self.lost.set()
+        self.connack.set()
+        self._wake.set()
+
+    def _on_publish(self, _c: Any, _u: Any, mid: int, _reason: Any, _p: Any) -> None:
+        self.acks.put(mid)
+        self._wake.set()
+
+
+class MqttPublisher:
+    """Publishes a panel's stored cycles, availability, KPIs and discovery configs."""
+
+    name = "mqtt"
+
+    def __init__(self, link: BrokerLink, cfg: PanelConfig, *, version: str) -> None:
+        mq = settings_of(cfg)
+        self.link = link
+        self.cfg = cfg
+        self.version = version
+        self.base = mq.base_topic_for(cfg.panel.id)
+        self.discovery_prefix = mq.discovery_prefix
+        self.max_age_s = mq.backlog_max_age_h * 3600.0
+        self.backoff = Backoff(mq.reconnect_min_s, mq.reconnect_max_s)
+        self.destination = f"{link.address} {self.base}"
+        self.state_topic = f"{self.base}/state"
+        self.availability_topic = f"{self.base}/availability"
+        self._wake = threading.Event()
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        # Owned by the publisher's thread:
+        self.outbox: Outbox | None = None
+        self.acked: Key = (0, 0)
+        self.acked_time_s: float | None = None
+        self.status = Status()
+        self._sent: Key = (0, 0)
+        self._inflight: OrderedDict[Key, bool] = OrderedDict()
+        self._mids: dict[int, tuple[Key, float]] = {}
+        self._dirty = False
+        self._saved_at = 0.0
+        self._kpi_checked: str | None = None
+        self._failures = 0
+
+    # ------------------------------------------------------------------ the runner's hooks
+    def start(self, *, database: Path) -> None:
+        """Start the thread (the database exists and is migrated)."""
+        ctx = contextvars.copy_context()  # the log lines keep the panel
+        self._thread = threading.Thread(target=ctx.run, args=(self._main, database),
+                                        name="dsfd-mqtt", daemon=True)
+        self._thread.start()
+
+    def cycle_stored(self, cycle: int) -> None:
+        """A cycle was committed: wake the thread (returns at once)."""
+        self._wake.set()
+
+    def stop(self, *, timeout_s: float = 8.0) -> None:
+        """Publish ``offline``, disconnect and end the thread (bounded by ``timeout_s``)."""
+        self._stop.set()
+        self._wake.set()
+        if self._thread is not None:
+            self._thread.join(timeout_s)
+            if self._thread.is_alive():
+                log.warning("MQTT publisher did not stop within %g s; abandoned", timeout_s)
+
+    # ------------------------------------------------------------------ the thread
+    def _main(self, database: Path) -> None:
+        try:
+            self.outbox = Outbox.open(database, self.destination)
+            self.acked, self.status = self.outbox.cursor()
+        except Exception:
+            log.exception("MQTT publisher cannot read the database; nothing will be published")
+            return
+        try:
+            while not self._stop.is_set():
+                conn = self._connect()
+                if conn is not None:
+                    try:
+                        self._serve(conn)
+                    except Exception:  # a bug here must not end publishing for good
+                        log.exception("MQTT publisher failed; reconnecting")
+                    finally:
+                        self._close(conn, graceful=self._stop.is_set())
+                if self._stop.is_set():
+                    break
+                self._stop.wait(self.backoff.next_delay())
+        finally:
+            self._save(force=True)
+            self.outbox.close()
+
+    def _connect(self) -> _Connection | None:
+        client = new_client(self.link)
+        client.will_set(self.availability_topic, "offline", qos=1, retain=True)
+        client.max_inflight_messages_set(WINDOW)
+        client.max_queued_messages_set(WINDOW + 64)  # + availability, discovery, KPIs
+        conn = _Connection(client, self._wake)
+        address = self.link.address
+        try:
+            client.connect(self.link.host, self.link.port, keepalive=self.link.keepalive_s)
+        except (OSError, ValueError) as exc:  # refused, unreachable, DNS, TLS (ssl.SSLError)
+            self._failed(f"cannot connect to the MQTT broker {address}: {exc}")
+            return None
+        client.loop_start()
+        deadline = time.monotonic() + CONNACK_WAIT_S
+        while not conn.connack.is_set() and not self._stop.is_set():
+            if not conn.connack.wait(min(0.2, max(deadline - time.monotonic(), 0.0))) \
+                    and time.monotonic() >= deadline:
+                break
+        if conn.connack.is_set() and not conn.refused and not conn.lost.is_set():
+            return conn
+        if conn.refused:
+            self._failed(f"the MQTT broker {address} refused the connection: {conn.refused}"
+                         + (" (check mqtt.username and mqtt.password_file)"
+                            if "author" in conn.refused or "password" in conn.refused else ""),
+                         level="error")
+        elif not self._stop.is_set():
+            why = conn.lost_reason or f"no CONNACK within {CONNACK_WAIT_S:g} s"
+            self._failed(f"MQTT broker {address} closed the connection: {why}")
+        self._close(conn, graceful=False)
+        return None
+
+    def _failed(self, message: str, *, level: str = "warning") -> None:
+        self._failures += 1
+        st = self.status
+        if message != st.last_error:
+            getattr(log, level)(message + "; control goes on, state is kept for later",
+                                broker=self.link.address, attempts=self._failures)
+        else:
+            log.debug(message, attempts=self._failures)
+        st.last_error, st.last_error_utc, st.connected = message, iso_now(), False
+        self._save(force=True)
+
+    def _serve(self, conn: _Connection) -> None:
+        client = conn.client
+        self.backoff.reset()
+        self.status.connected = True
+        self._sent = self.acked
+        self._inflight.clear()
+        self._mids.clear()
+        backlog = self._backlog()
+        log.info("MQTT connected", broker=self.link.address, base_topic=self.base,
+                 backlog=backlog, after_failures=self._failures or None)
+        self._failures = 0
+        client.publish(self.availability_topic, "online", qos=1, retain=True)
+        if self.discovery_prefix is not None:
+            for topic, config in discovery_configs(self.cfg, base_topic=self.base,
+                                                   discovery_prefix=self.discovery_prefix,
+                                                   version=self.version):
+                client.publish(topic, dumps(config), qos=1, retain=True)
+        self._kpi_checked = None
+        self._save(force=True)
+        while not self._stop.is_set() and not conn.lost.is_set():
+            self._wake.wait(0.5)
+            self._wake.clear()
+            self._take_acks(conn)
+            if conn.lost.is_set():
+                break
+            self._send_more(client)
+            self._publish_kpi(client)
+            self._save()
+        if conn.lost.is_set() and not self._stop.is_set():
+            self.status.connected = False
+            self._failed(f"MQTT connection to {self.link.address} lost: "
+                         f"{conn.lost_reason or 'closed'} ({len(self._inflight)} state "
+                         "message(s) unacknowledged, sent again on reconnect)")
+
+    def _send_more(self, client: Client) -> None:
+        import paho.mqtt.client as mqtt
+
+        room = WINDOW - len(self._inflight)
+        if room <= 0 or self.outbox is None:
+            return
+        cycles, skipped, before_first = self.outbox.pending(self._sent, limit=room,
+                                                            max_age_s=self.max_age_s)
+        if skipped and before_first is not None:
+            self.status.expired += skipped
+            log.warning("%d stored cycle(s) older than mqtt.backlog_max_age_h passed over",
+                        skipped, backlog_max_age_h=self.max_age_s / 3600.0)
+            self._inflight[before_first] = True  # counts as delivered for the cursor
+            self._dirty = True
+        pid = self.cfg.panel.id
+        for p in cycles:
+            payload = dumps(state_message(pid, p.row, p.samples, calibrated_s=p.calibrated_s))
+            info = client.publish(self.state_topic, payload, qos=1, retain=True)
+            if info.rc != mqtt.MQTT_ERR_SUCCESS:
+                break  # no connection (the loop notices) or paho's queue is full: later
+            self._mids[info.mid] = (p.key, float(p.row["time_s"]))
+            self._inflight[p.key] = False
+            self._sent = p.key
+        self._advance()
+
+    def _take_acks(self, conn: _Connection) -> None:
+        while True:
+            try:
+                mid = conn.acks.get_nowait()
+            except queue.Empty:
+                break
+            entry = self._mids.pop(mid, None)
+            if entry is None:
+                continue  # availability, discovery, KPIs
+            key, time_s = entry
+            if key in self._inflight:
+                self._inflight[key] = True
+                self.status.delivered += 1
+                if self.acked_time_s is None or time_s > self.acked_time_s:
+                    self.acked_time_s = time_s
+        self._advance()
+
+    def _advance(self) -> None:
+        """Move the cursor over the acknowledged prefix of the in-flight messages."""
+        while self._inflight:
+            key, done = next(iter(self._inflight.items()))
+            if not done:
+                break
+            self._inflight.popitem(last=False)
+            self.acked = max(self.acked, key)
+            self._dirty = True
+
+    def _publish_kpi(self, client: Client) -> None:
+        """The last completed local day's KPIs, once per day and once per connection."""
+        if self.outbox is None:
+            return
+        newest = self.outbox.newest_time_s()
+        if newest is None:
+            return
+        offset = self.cfg.site.utc_offset_h
+        day = local_day(newest, offset) - timedelta(days=1)
+        if self._kpi_checked == day.isoformat():
+            return
+        self._kpi_checked = day.isoformat()
+        rows, flagged, updates = self.outbox.day_rows(day, offset)
+        if not rows:
+            return
+        kpis = daily_kpis(self.cfg.panel.id, day, rows, utc_offset_h=offset,
+                          flagged_samples=flagged, calibration_updates=updates)
+        client.publish(f"{self.base}/kpi", dumps(kpis), qos=1, retain=True)
+        self.status.kpi_day = day.isoformat()
+        self._dirty = True
+
+    def _backlog(self) -> int:
+        if self.outbox is None:
+            return 0
+        return self.outbox.backlog(self.acked, max_age_s=self.max_age_s)
+
+    def _save(self, *, force: bool = False) -> None:
+        now = time.monotonic()
+        if self.outbox is None or not (force or (self._dirty
+                                                 and now - self._saved_at >= SAVE_EVERY_S)):
+            return
+        try:
+            self.status.backlog = self._backlog()
+            self.outbox.save(self.acked, self.status, time_s=self.acked_time_s)
+        except Exception as exc:  # the database is busy or full: try again later
+            log.warning("MQTT delivery cursor not saved: %s", exc)
+            return
+        self._dirty = False
+        self._saved_at = now
+
+    def _close(self, conn: _Connection, *, graceful: bool) -> None:
+        client = conn.client
+        if graceful and client.is_connected():
+            info = client.publish(self.availability_topic, "offline", qos=1, retain=True)
+            with contextlib.suppress(RuntimeError, ValueError):
+                info.wait_for_publish(timeout=2.0)
+            self._take_acks(conn)
+            client.disconnect()
+        else:
+            client.disconnect()  # stops paho's thread; the will goes out if the link broke
+        client.loop_stop()
+        self.status.connected = False
