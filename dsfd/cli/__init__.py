@@ -14,7 +14,7 @@ from collections.abc import Sequence
 from dsfd import __version__
 
 #: Command modules, in the order they appear in ``dsfd --help``.
-COMMANDS = ("check_config", "simulate", "run", "bench", "calibrate", "validate",
+COMMANDS = ("check_config", "simulate", "run", "fleet", "bench", "calibrate", "validate",
             "convert_aalborg")
 
 EXIT_OK = 0

@@ -109,6 +109,11 @@ class LocalBroker:
         """SIGTERM: Mosquitto saves its database (retained messages, sessions) and exits."""
         self._end(signal.SIGTERM, timeout_s)
 
+    def pause(self) -> None:
+        """SIGSTOP: a hung broker — connections stay open, nothing is answered."""
+        if self.running and self._proc is not None:
+            self._proc.send_signal(signal.SIGSTOP)
+
     def kill(self) -> None:
         """SIGKILL: gone without saving anything."""
         self._end(signal.SIGKILL, 10.0)
@@ -118,6 +123,7 @@ class LocalBroker:
         if proc is None or proc.poll() is not None:
             return
         proc.send_signal(sig)
+        proc.send_signal(signal.SIGCONT)  # a paused broker handles the signal now
         try:
             proc.wait(timeout_s)
         except subprocess.TimeoutExpired:

@@ -238,4 +238,5 @@ def reason_text(reason: Any) -> str:
     """A paho reason code or error as the text a person reads in the log."""
     text = str(reason)
     return {"Not authorized": "not authorised",
-            "Bad user name or password": "bad user name or password"}.get(text, text)
+            "Bad user name or password": "bad user name or password",
+            "Unspecified error": "the connection broke"}.get(text, text)

@@ -1,0 +1,117 @@
+"""A wrong password is reported and control goes on; ``dsfd fleet`` sees several daemons.
+
+Real ``dsfd run`` processes against a real Mosquitto with a password file.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import signal
+import subprocess
+from pathlib import Path
+
+from dsfd.integrations.mqtt.broker import LocalBroker
+from tests.daemon.harness import ROOT, DaemonProcess, dsfd_command, query
+from tests.integrations.mqtt_harness import mqtt_panel, run_args
+
+MORNING = "2022-01-01T23:30:00Z"
+
+
+def test_wrong_password_is_a_clear_error_and_control_goes_on(
+        broker: LocalBroker, tmp_path: Path) -> None:
+    panel = mqtt_panel(tmp_path / "panel.yaml", broker, password="not-the-password")
+    state = tmp_path / "state"
+
+    async def run() -> DaemonProcess:
+        daemon = await DaemonProcess(run_args(panel, state, start=MORNING, cycles=8,
+                                              speed=120.0)).start()
+        assert await daemon.wait_exit() == 0, daemon.stderr
+        return daemon
+
+    daemon = asyncio.run(run())
+    assert daemon.cycles_logged == list(range(1, 9))  # control went on
+    db = state / "timeseries.sqlite"
+    assert query(db, "SELECT COUNT(*) FROM decisions")[0][0] == 8
+    errors = [r for r in daemon.records if r.get("level") == "error"]
+    assert len(errors) == 1, errors  # once, not once per attempt
+    message = errors[0]["event"]
+    assert "refused" in message and "not authorised" in message
+    assert "mqtt.password_file" in message and errors[0]["broker"] == broker.address
+    (connected, last_error, cycle), = query(db, "SELECT connected, last_error, cycle "
+                                                "FROM mqtt_cursor")
+    assert connected == 0 and "not authorised" in last_error and cycle == 0
+    assert "not authorised" in broker.log()  # the broker's own account of it
+
+
+def test_fleet_lists_three_daemons_with_their_regimes(broker: LocalBroker,
+                                                      tmp_path: Path) -> None:
+    starts = {"fleet-east": MORNING, "fleet-south": "2022-01-02T04:00:00Z",
+              "fleet-west": "2022-01-01T14:00:00Z"}  # morning, early afternoon, night
+    panels = {pid: mqtt_panel(tmp_path / f"{pid}.yaml", broker, panel_id=pid)
+              for pid in starts}
+    secret = tmp_path / "ops-password"
+    secret.write_text(broker.password + "\n")
+    fleet = dsfd_command("fleet", "--broker", broker.address, "--username", broker.username,
+                         "--password-file", str(secret), "--wait", "1")
+
+    async def run() -> tuple[list[dict], str]:
+        daemons = [await DaemonProcess(run_args(panels[pid], tmp_path / pid, start=start,
+                                                cycles=400, speed=60.0)).start()
+                   for pid, start in starts.items()]
+        for d in daemons:
+            await d.wait_cycle(3)
+        listed = await asyncio.to_thread(subprocess.run, [*fleet, "--json"], cwd=ROOT,
+                                         capture_output=True, text=True, timeout=60)
+        table = await asyncio.to_thread(subprocess.run, fleet, cwd=ROOT,
+                                        capture_output=True, text=True, timeout=60)
+        for d in daemons:
+            d.signal(signal.SIGTERM)
+        for d in daemons:
+            assert await d.wait_exit() == 0, d.stderr
+        assert listed.returncode == 0, listed.stderr
+        assert table.returncode == 0, table.stderr
+        return json.loads(listed.stdout), table.stdout
+
+    rows, table = asyncio.run(run())
+    assert [r["panel"] for r in rows] == sorted(starts)
+    for r in rows:
+        assert r["online"] is True and r["hold"] is None
+        # Regime, positions and flagged sensors are those the daemon stored for the cycle
+        # it reported.
+        db = tmp_path / r["panel"] / "timeseries.sqlite"
+        (afr, phi, or_pct, time_utc, method), = query(
+            db, "SELECT afr, phi_deg, or_pct, time_utc, method FROM decisions "
+            "WHERE run_id = ? AND cycle = ?", r["run"], r["cycle"])
+        assert (r["regime"], r["louver_deg"], r["damper_pct"]) == (afr, phi, or_pct)
+        flagged = query(db, "SELECT signal, quality FROM samples WHERE run_id = ? AND "
+                        "cycle = ? AND quality != 'good' ORDER BY signal", r["run"], r["cycle"])
+        assert [f for f in r["faults"] if ": " in f and not f.startswith("safe state")] == [
+            f"{s}: {q}" for s, q in flagged]
+        assert r["set_by"] in (method, "wind")
+        assert r["last_seen_utc"] == time_utc and r["decision_ms"] > 0
+    print(table)
+    lines = table.splitlines()
+    assert lines[0].split()[:3] == ["panel", "online", "mode"] and len(lines) == 4
+    for line, r in zip(lines[1:], rows, strict=True):
+        assert line.startswith(r["panel"]) and f"{r['regime']} {r['regime_name']}" in line
+
+    # After the daemons stopped, their last state stays (retained) and they show offline.
+    done = subprocess.run([*fleet, "--json"], cwd=ROOT, capture_output=True, text=True,
+                          timeout=60, check=False)
+    assert [r["online"] for r in json.loads(done.stdout)] == [False, False, False]
+
+
+def test_fleet_reports_a_broker_it_cannot_use(broker: LocalBroker, tmp_path: Path) -> None:
+    wrong = tmp_path / "wrong"
+    wrong.write_text("nope\n")
+    refused = subprocess.run(dsfd_command("fleet", "--broker", broker.address, "--username",
+                                          broker.username, "--password-file", str(wrong)),
+                             cwd=ROOT, capture_output=True, text=True, timeout=60,
+                             check=False)
+    assert refused.returncode == 1 and "not authorised" in refused.stderr
+    empty = subprocess.run(dsfd_command("fleet", "--broker", broker.address, "--username",
+                                        broker.username, "--password-file", str(wrong),
+                                        "--base", "a/+"), cwd=ROOT, capture_output=True,
+                           text=True, timeout=60, check=False)
+    assert empty.returncode == 2 and "--base 'a/+'" in empty.stderr

@@ -1,0 +1,32 @@
+"""The schema step that adds the MQTT delivery cursor migrates an older database in place.
+
+(Written when that step was 1 → 2, the newest; if later steps follow it, undo those too.)
+"""
+
+from __future__ import annotations
+
+import sqlite3
+from pathlib import Path
+
+from dsfd.storage.timeseries import MIGRATIONS, SCHEMA_VERSION, Store
+
+
+def test_a_schema_1_database_is_migrated_and_keeps_its_rows(tmp_path: Path) -> None:
+    store = Store.open(tmp_path)
+    store.begin_run(panel="p", mode="test", version="0", config_path=None)
+    store.end_run(reason="test", cycles=0)
+    store.close()
+    db = tmp_path / "timeseries.sqlite"
+    step = next(v for v, sql in MIGRATIONS.items() if "mqtt_cursor" in sql)
+    assert step == SCHEMA_VERSION  # the newest step (see the docstring otherwise)
+    with sqlite3.connect(db) as conn:  # what the dsfd before this step left behind
+        conn.execute("DROP TABLE mqtt_cursor")
+        conn.execute("UPDATE meta SET value = ? WHERE key = 'schema_version'", (step - 1,))
+    Store.open(tmp_path).close()
+    with sqlite3.connect(db) as conn:
+        meta = dict(conn.execute("SELECT key, value FROM meta"))
+        columns = [r[1] for r in conn.execute("PRAGMA table_info(mqtt_cursor)")]
+        runs = conn.execute("SELECT panel FROM runs").fetchall()
+    assert meta["schema_version"] == str(SCHEMA_VERSION) and f"migrated_to_{step}" in meta
+    assert columns[:3] == ["destination", "run_id", "cycle"]
+    assert runs == [("p",)]
