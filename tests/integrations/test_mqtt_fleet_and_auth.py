@@ -1,4 +1,5 @@
-"""A wrong password is reported and control goes on; ``dsfd fleet`` sees several daemons.
+"""A wrong password or a wrong certificate is reported and control goes on; TLS works;
+``dsfd fleet`` sees several daemons.
 
 Real ``dsfd run`` processes against a real Mosquitto with a password file.
 """
@@ -7,13 +8,16 @@ from __future__ import annotations
 
 import asyncio
 import json
+import shutil
 import signal
 import subprocess
 from pathlib import Path
 
-from dsfd.integrations.mqtt.broker import LocalBroker
+import pytest
+
+from dsfd.integrations.mqtt.broker import LocalBroker, make_test_ca
 from tests.daemon.harness import ROOT, DaemonProcess, dsfd_command, query
-from tests.integrations.mqtt_harness import mqtt_panel, run_args
+from tests.integrations.mqtt_harness import Subscriber, mosquitto_missing, mqtt_panel, run_args
 
 MORNING = "2022-01-01T23:30:00Z"
 
@@ -115,3 +119,29 @@ def test_fleet_reports_a_broker_it_cannot_use(broker: LocalBroker, tmp_path: Pat
                                         "--base", "a/+"), cwd=ROOT, capture_output=True,
                            text=True, timeout=60, check=False)
     assert empty.returncode == 2 and "--base 'a/+'" in empty.stderr
+
+
+def test_tls_to_a_broker_whose_certificate_chains_to_the_configured_ca(tmp_path: Path) -> None:
+    if why := mosquitto_missing() or ("" if shutil.which("openssl") else "openssl missing"):
+        pytest.skip(why)
+    with LocalBroker(tmp_path / "broker", tls=True) as broker:
+        sub = Subscriber(broker, "dsfd/#", out=tmp_path / "sub.txt").start()
+        stranger, _, _ = make_test_ca(tmp_path / "other-ca")
+        runs = {}
+        for name, ca in (("good", broker.ca_file), ("stranger", stranger)):
+            panel = mqtt_panel(tmp_path / f"{name}.yaml", broker, mqtt={
+                "port": broker.tls_port, "tls": {"ca_file": str(ca)}})
+            done = subprocess.run(dsfd_command(*run_args(
+                panel, tmp_path / name, start=MORNING, cycles=3, speed=120.0)), cwd=ROOT,
+                capture_output=True, text=True, timeout=150, check=False)
+            assert done.returncode == 0, done.stderr
+            runs[name] = done.stdout
+        got = sub.wait_for(lambda ms: any(m.payload == "offline" for m in ms))
+        sub.stop()
+    assert [m.json()["cycle"] for m in got if m.topic.endswith("/state")] == [1, 2, 3]
+    assert "certificate verify failed" not in runs["good"]
+    # A broker whose certificate does not chain to the configured CA is refused, loudly,
+    # and control goes on.
+    assert "certificate verify failed" in runs["stranger"]
+    assert query(tmp_path / "stranger" / "timeseries.sqlite",
+                 "SELECT COUNT(*) FROM decisions")[0][0] == 3

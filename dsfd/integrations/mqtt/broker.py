@@ -19,7 +19,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["LocalBroker", "find_mosquitto", "free_port"]
+__all__ = ["LocalBroker", "find_mosquitto", "free_port", "make_test_ca"]
 
 _SEARCH = ("/usr/sbin", "/usr/local/sbin", "/usr/bin", "/usr/local/bin")
 
@@ -42,14 +42,44 @@ def free_port() -> int:
         return int(s.getsockname()[1])
 
 
+def make_test_ca(directory: Path) -> tuple[Path, Path, Path]:
+    """A throw-away CA and a server certificate for 127.0.0.1 (``openssl`` CLI, EC P-256):
+    (ca.pem, server.pem, server.key). For tests and benchmarks only."""
+    openssl = shutil.which("openssl")
+    if openssl is None:
+        raise FileNotFoundError("openssl is not installed (apt-get install openssl)")
+    directory.mkdir(parents=True, exist_ok=True)
+    ca, ca_key = directory / "ca.pem", directory / "ca.key"
+    cert, key, csr = directory / "server.pem", directory / "server.key", directory / "server.csr"
+    ext = directory / "server.ext"
+    ext.write_text("subjectAltName=IP:127.0.0.1\nbasicConstraints=CA:FALSE\n"
+                   "keyUsage=critical,digitalSignature\nextendedKeyUsage=serverAuth\n"
+                   "authorityKeyIdentifier=keyid\nsubjectKeyIdentifier=hash\n")
+    ec = ["-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1", "-nodes"]
+    for args in (
+            ["req", "-x509", *ec, "-keyout", ca_key, "-out", ca, "-days", "2",
+             "-subj", "/CN=dsfd test CA", "-addext", "basicConstraints=critical,CA:TRUE",
+             "-addext", "keyUsage=critical,keyCertSign,cRLSign"],
+            ["req", *ec, "-keyout", key, "-out", csr, "-subj", "/CN=127.0.0.1"],
+            ["x509", "-req", "-in", csr, "-CA", ca, "-CAkey", ca_key, "-CAcreateserial",
+             "-out", cert, "-days", "2", "-extfile", ext]):
+        subprocess.run([openssl, *map(str, args)], check=True, capture_output=True)
+    return ca, cert, key
+
+
 @dataclass
 class LocalBroker:
-    """Mosquitto with one user; ``start``/``stop``/``kill`` like an operator would."""
+    """Mosquitto with one user; ``start``/``stop``/``kill`` like an operator would.
+
+    With ``tls=True`` a second listener (:attr:`tls_port`) speaks TLS with a certificate of a
+    throw-away CA (:attr:`ca_file`).
+    """
 
     directory: Path
     username: str = "dsfd"
     password: str = "s3cret-for-tests"
     port: int = field(default_factory=free_port)
+    tls: bool = False
     _proc: subprocess.Popen[bytes] | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
@@ -77,7 +107,16 @@ class LocalBroker:
             "autosave_interval 0\n"
             "max_queued_messages 100000\n"
             f"log_dest file {self.log_file}\n"
-            "log_type error\nlog_type warning\nlog_type notice\nlog_type information\n")
+            "log_type error\nlog_type warning\nlog_type notice\nlog_type information\n"
+            + self._tls_listener())
+
+    def _tls_listener(self) -> str:
+        if not self.tls:
+            return ""
+        self.ca_file, cert, key = make_test_ca(self.directory / "tls")
+        self.tls_port = free_port()
+        return (f"listener {self.tls_port} 127.0.0.1\ncafile {self.ca_file}\n"
+                f"certfile {cert}\nkeyfile {key}\n")
 
     @property
     def address(self) -> str:
