@@ -23,8 +23,9 @@ are looked up in ``$CREDENTIALS_DIRECTORY`` when it is set (systemd's ``LoadCred
 else next to the panel file; :mod:`dsfd.integrations.mqtt.link` resolves and reads them when
 ``dsfd run`` starts, naming the key path if one is missing.
 
-Topic names follow MQTT 3.1.1 §4.7: UTF-8, ``/``-separated levels, no wildcards (``+``,
-``#``) in a name that is published to, and no leading ``$`` (reserved for the broker).
+Topic names follow MQTT 3.1.1 (OASIS, 2014), section 4.7: UTF-8, ``/``-separated levels, no
+wildcards (``+``, ``#``) in a name that is published to, and no leading ``$`` (reserved for
+the broker).
 """
 
 from __future__ import annotations
