@@ -59,7 +59,7 @@ def test_fleet_lists_three_daemons_with_their_regimes(broker: LocalBroker,
     fleet = dsfd_command("fleet", "--broker", broker.address, "--username", broker.username,
                          "--password-file", str(secret), "--wait", "1")
 
-    async def run() -> tuple[list[dict], str]:
+    async def run() -> list[dict]:
         daemons = [await DaemonProcess(run_args(panels[pid], tmp_path / pid, start=start,
                                                 cycles=400, speed=60.0)).start()
                    for pid, start in starts.items()]
@@ -67,43 +67,55 @@ def test_fleet_lists_three_daemons_with_their_regimes(broker: LocalBroker,
             await d.wait_cycle(3)
         listed = await asyncio.to_thread(subprocess.run, [*fleet, "--json"], cwd=ROOT,
                                          capture_output=True, text=True, timeout=60)
-        table = await asyncio.to_thread(subprocess.run, fleet, cwd=ROOT,
-                                        capture_output=True, text=True, timeout=60)
         for d in daemons:
             d.signal(signal.SIGTERM)
         for d in daemons:
             assert await d.wait_exit() == 0, d.stderr
         assert listed.returncode == 0, listed.stderr
-        assert table.returncode == 0, table.stderr
-        return json.loads(listed.stdout), table.stdout
+        return json.loads(listed.stdout)
 
-    rows, table = asyncio.run(run())
-    assert [r["panel"] for r in rows] == sorted(starts)
-    for r in rows:
-        assert r["online"] is True and r["hold"] is None
-        # Regime, positions and flagged sensors are those the daemon stored for the cycle
-        # it reported.
-        db = tmp_path / r["panel"] / "timeseries.sqlite"
-        (afr, phi, or_pct, time_utc, method), = query(
-            db, "SELECT afr, phi_deg, or_pct, time_utc, method FROM decisions "
-            "WHERE run_id = ? AND cycle = ?", r["run"], r["cycle"])
-        assert (r["regime"], r["louver_deg"], r["damper_pct"]) == (afr, phi, or_pct)
-        flagged = query(db, "SELECT signal, quality FROM samples WHERE run_id = ? AND "
-                        "cycle = ? AND quality != 'good' ORDER BY signal", r["run"], r["cycle"])
-        assert [f for f in r["faults"] if ": " in f and not f.startswith("safe state")] == [
-            f"{s}: {q}" for s, q in flagged]
-        assert r["set_by"] in (method, "wind")
-        assert r["last_seen_utc"] == time_utc and r["decision_ms"] > 0
-    print(table)
-    lines = table.splitlines()
+    def check_against_the_databases(rows: list[dict]) -> None:
+        assert [r["panel"] for r in rows] == sorted(starts)
+        for r in rows:
+            assert r["hold"] is None
+            # Regime, positions and flagged sensors are those the daemon stored for the
+            # cycle it reported.
+            db = tmp_path / r["panel"] / "timeseries.sqlite"
+            (afr, phi, or_pct, time_utc, method), = query(
+                db, "SELECT afr, phi_deg, or_pct, time_utc, method FROM decisions "
+                "WHERE run_id = ? AND cycle = ?", r["run"], r["cycle"])
+            assert (r["regime"], r["louver_deg"], r["damper_pct"]) == (afr, phi, or_pct)
+            flagged = query(db, "SELECT signal, quality FROM samples WHERE run_id = ? AND "
+                            "cycle = ? AND quality != 'good' ORDER BY signal", r["run"],
+                            r["cycle"])
+            assert [f for f in r["faults"] if not f.startswith("safe state")] == [
+                f"{s}: {q}" for s, q in flagged]
+            assert r["set_by"] in (method, "wind")
+            assert r["last_seen_utc"] == time_utc and r["decision_ms"] > 0
+
+    running = asyncio.run(run())
+    check_against_the_databases(running)
+    assert [r["online"] for r in running] == [True, True, True]
+
+    # Stopped: each panel's last state stays on the broker (retained) and it shows offline;
+    # a clean stop sent the last stored cycle first.
+    listed = subprocess.run([*fleet, "--json"], cwd=ROOT, capture_output=True, text=True,
+                            timeout=60, check=False)
+    table = subprocess.run(fleet, cwd=ROOT, capture_output=True, text=True, timeout=60,
+                           check=False)
+    assert listed.returncode == 0 and table.returncode == 0, listed.stderr + table.stderr
+    stopped = json.loads(listed.stdout)
+    check_against_the_databases(stopped)
+    for r in stopped:
+        last = query(tmp_path / r["panel"] / "timeseries.sqlite",
+                     "SELECT MAX(cycle) FROM decisions")[0][0]
+        assert r["online"] is False and r["cycle"] == last
+    print(table.stdout)
+    lines = table.stdout.splitlines()
     assert lines[0].split()[:3] == ["panel", "online", "mode"] and len(lines) == 4
-    for line, r in zip(lines[1:], rows, strict=True):
-        assert line.startswith(r["panel"]) and f"{r['regime']} {r['regime_name']}" in line
-
-    # After the daemons stopped, their last state stays (retained) and they show offline.
-    done = subprocess.run([*fleet, "--json"], cwd=ROOT, capture_output=True, text=True,
-                          timeout=60, check=False)
-    assert [r["online"] for r in json.loads(done.stdout)] == [False, False, False]
+    for line, r in zip(lines[1:], stopped, strict=True):
+        assert line.startswith(f"{r['panel']}  ") and " no " in line
+        assert f"{r['regime']} {r['regime_name']}" in line
 
 
 def test_fleet_reports_a_broker_it_cannot_use(broker: LocalBroker, tmp_path: Path) -> None:

@@ -14,6 +14,7 @@ few seconds).
 
 from __future__ import annotations
 
+import bisect
 import sqlite3
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -142,11 +143,11 @@ class Outbox:
             "SELECT COUNT(*) FROM decisions WHERE (run_id, cycle) > (?, ?) "
             "AND (run_id, cycle) < (?, ?)", (*after, *first)).fetchone()[0])
         samples = self._samples(rows)
+        calibrated = self._calibration_times([float(r["time_s"]) for r in rows])
         out = []
-        for r in rows:
+        for r, cal in zip(rows, calibrated, strict=True):
             key = (int(r["run_id"]), int(r["cycle"]))
-            out.append(PendingCycle(key, dict(r), samples.get(key, {}),
-                                    self._calibrated_s(float(r["time_s"]))))
+            out.append(PendingCycle(key, dict(r), samples.get(key, {}), cal))
         return out, skipped, ((first[0], first[1] - 1) if skipped else None)
 
     def _samples(self, rows: list[sqlite3.Row]
@@ -162,10 +163,20 @@ class Outbox:
                 out.setdefault((run, int(cycle)), {})[signal] = (value, quality)
         return out
 
-    def _calibrated_s(self, time_s: float) -> float | None:
-        row = self.conn.execute("SELECT MAX(time_s) FROM parameters WHERE source = 'online' "
-                                "AND time_s <= ?", (time_s,)).fetchone()
-        return None if row[0] is None else float(row[0])
+    def _calibration_times(self, times_s: list[float]) -> list[float | None]:
+        """For each cycle time, the newest on-line calibration update at or before it [s]
+        (two queries per batch: the parameters table has no time index)."""
+        lo, hi = min(times_s), max(times_s)
+        before = self.conn.execute("SELECT MAX(time_s) FROM parameters WHERE source = "
+                                   "'online' AND time_s <= ?", (lo,)).fetchone()[0]
+        updates = [float(t) for (t,) in self.conn.execute(
+            "SELECT time_s FROM parameters WHERE source = 'online' AND time_s > ? "
+            "AND time_s <= ? ORDER BY time_s", (lo, hi))]
+        out: list[float | None] = []
+        for t in times_s:
+            i = bisect.bisect_right(updates, t)
+            out.append(updates[i - 1] if i else (None if before is None else float(before)))
+        return out
 
     # ------------------------------------------------------------------ KPIs
     def day_rows(self, day: date, utc_offset_h: float) -> tuple[list[dict[str, Any]], int, int]:

@@ -60,6 +60,8 @@ WINDOW = 100
 SAVE_EVERY_S = 2.0
 #: How long to wait for the CONNACK after the TCP connection is up [s].
 CONNACK_WAIT_S = 10.0
+#: At a clean stop, how long the cycles stored so far may take to go out [s].
+DRAIN_ON_STOP_S = 2.0
 
 
 class _Connection:
@@ -243,11 +245,26 @@ class MqttPublisher:
             self._send_more(client)
             self._publish_kpi(client)
             self._save()
+        if self._stop.is_set() and not conn.lost.is_set():
+            self._drain(conn)
         if conn.lost.is_set() and not self._stop.is_set():
             self.status.connected = False
             self._failed(f"MQTT connection to {self.link.address} lost: "
                          f"{conn.lost_reason or 'closed'} ({len(self._inflight)} state "
                          "message(s) unacknowledged, sent again on reconnect)")
+
+    def _drain(self, conn: _Connection) -> None:
+        """At a clean stop: the cycles stored so far go out (bounded by
+        :data:`DRAIN_ON_STOP_S`), so the retained state is the last cycle; the rest waits
+        in the database for the next start."""
+        deadline = time.monotonic() + DRAIN_ON_STOP_S
+        while time.monotonic() < deadline and not conn.lost.is_set():
+            self._take_acks(conn)
+            self._send_more(conn.client)
+            if not self._inflight:
+                break
+            self._wake.wait(0.05)
+            self._wake.clear()
 
     def _send_more(self, client: Client) -> None:
         import paho.mqtt.client as mqtt
