@@ -92,6 +92,7 @@ def _integrations(cfg: PanelConfig, config_path: Path) -> list[Integration]:
 def run(args: argparse.Namespace) -> int:
     from dsfd.daemon.logging_setup import configure_logging
     from dsfd.daemon.runner import RunOptions, load_for_run, resolve_state_dir, serve
+    from dsfd.integrations.mqtt.link import MissingExtraError
     from dsfd.measured import parse_iso_utc
 
     problem = _check_options(args)
@@ -119,7 +120,7 @@ def run(args: argparse.Namespace) -> int:
         for issue in exc.issues:
             print(f"  {issue}", file=sys.stderr)
         return EXIT_USAGE
-    except RuntimeError as exc:  # an optional extra is missing (MissingExtraError)
+    except MissingExtraError as exc:
         print(f"dsfd run: {args.config}: {exc}; nothing was started", file=sys.stderr)
         return EXIT_USAGE
     plant = None

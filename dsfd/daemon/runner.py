@@ -288,9 +288,10 @@ class _Daemon:
             ("mqtt", new.mqtt != self.cfg.mqtt)) if changed]
         if kept:
             log.warning("reload: %s changed; restart the service to apply", ", ".join(kept))
-            new = dataclasses.replace(new, devices=self.cfg.devices, mqtt=self.cfg.mqtt,
-                                      daemon=dataclasses.replace(
-                new.daemon, state_directory=self.cfg.daemon.state_directory))
+            new = dataclasses.replace(
+                new, devices=self.cfg.devices, mqtt=self.cfg.mqtt,
+                daemon=dataclasses.replace(new.daemon,
+                                           state_directory=self.cfg.daemon.state_directory))
         note = self.controller.reconfigure(new)
         self.cfg = new
         log.info("configuration reloaded", file=str(path), calibration=note,
