@@ -29,7 +29,7 @@ def test_wrong_password_is_a_clear_error_and_control_goes_on(
 
     async def run() -> DaemonProcess:
         daemon = await DaemonProcess(run_args(panel, state, start=MORNING, cycles=8,
-                                              speed=120.0)).start()
+                                              speed=240.0)).start()
         assert await daemon.wait_exit() == 0, daemon.stderr
         return daemon
 
@@ -57,11 +57,11 @@ def test_fleet_lists_three_daemons_with_their_regimes(broker: LocalBroker,
     secret = tmp_path / "ops-password"
     secret.write_text(broker.password + "\n")
     fleet = dsfd_command("fleet", "--broker", broker.address, "--username", broker.username,
-                         "--password-file", str(secret), "--wait", "1")
+                         "--password-file", str(secret), "--wait", "0.5")
 
     async def run() -> list[dict]:
         daemons = [await DaemonProcess(run_args(panels[pid], tmp_path / pid, start=start,
-                                                cycles=400, speed=60.0)).start()
+                                                cycles=400, speed=240.0)).start()
                    for pid, start in starts.items()]
         for d in daemons:
             await d.wait_cycle(3)
@@ -147,7 +147,7 @@ def test_tls_to_a_broker_whose_certificate_chains_to_the_configured_ca(tmp_path:
             panel = mqtt_panel(tmp_path / f"{name}.yaml", broker, mqtt={
                 "port": broker.tls_port, "tls": {"ca_file": str(ca)}})
             done = subprocess.run(dsfd_command(*run_args(
-                panel, tmp_path / name, start=MORNING, cycles=3, speed=120.0)), cwd=ROOT,
+                panel, tmp_path / name, start=MORNING, cycles=3, speed=240.0)), cwd=ROOT,
                 capture_output=True, text=True, timeout=150, check=False)
             assert done.returncode == 0, done.stderr
             runs[name] = done.stdout

@@ -61,7 +61,7 @@ def test_discovery_configs_and_states_arrive_as_home_assistant_expects(
     state_dir = tmp_path / "state"
     sub = Subscriber(broker, "homeassistant/#", "dsfd/#", out=tmp_path / "sub.txt").start()
     done = subprocess.run(dsfd_command(*run_args(panel, state_dir, start=START, cycles=CYCLES,
-                                                 speed=120.0)),
+                                                 speed=240.0)),
                           cwd=ROOT, capture_output=True, text=True, timeout=150, check=False)
     assert done.returncode == 0, done.stderr
     got = sub.wait_for(lambda ms: any(m.topic == f"{BASE}/availability" and m.payload ==
