@@ -54,8 +54,9 @@ from dsfd.drivers.base import Command as DriverCommand
 from dsfd.drivers.simulated import SimulatedDriver
 from dsfd.estimation.params import ParameterSpace, full_vector
 from dsfd.estimation.state import CalibrationState
+from dsfd.physics.boundary import WeatherInputs
 from dsfd.physics.constants import T_ZERO
-from dsfd.physics.forcing import Forcing, WeatherInputs, facade_forcing
+from dsfd.physics.forcing import Forcing, facade_forcing
 from dsfd.physics.model import LumpedModel
 from dsfd.physics.solar import extraterrestrial_irradiance, solar_position
 from dsfd.sim.plant.actuators import Command

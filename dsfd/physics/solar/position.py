@@ -12,6 +12,8 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from dsfd.physics.constants import STANDARD_PRESSURE_PA
+
 FloatArray = NDArray[np.float64]
 
 #: Solar constant of the Spencer extraterrestrial irradiance [W/m2] (pvlib default).
@@ -126,7 +128,8 @@ def solar_position(
 
 
 def apparent_elevation(
-    elevation_deg: ArrayLike, *, pressure_pa: ArrayLike = 101325.0, temp_c: ArrayLike = 12.0
+    elevation_deg: ArrayLike, *, pressure_pa: ArrayLike = STANDARD_PRESSURE_PA,
+    temp_c: ArrayLike = 12.0,
 ) -> FloatArray:
     """Sun elevation corrected for atmospheric refraction.
 

@@ -32,8 +32,8 @@ import numpy as np
 
 from dsfd.config.panel import PanelConfig
 from dsfd.physics.airflow import AirflowGeometry
-from dsfd.physics.constants import T_ZERO
-from dsfd.physics.forcing import FacadeOptics, WeatherInputs, facade_forcing, local_wind_speed
+from dsfd.physics.boundary import WeatherInputs, sky_dew_point_k
+from dsfd.physics.forcing import FacadeOptics, facade_forcing, local_wind_speed
 from dsfd.physics.longwave import (
     cavity_exchange_matrix,
     exterior_radiant_temperature,
@@ -49,9 +49,8 @@ from dsfd.physics.solar import (
     solar_position,
 )
 from dsfd.sim.plant.config import PlantOptions, drift_factors
-from dsfd.sim.replay import _dew_point_k, weather_inputs
-from dsfd.weather import WeatherSeries
-from dsfd.weather.series import _interp_wind_direction
+from dsfd.sim.replay import series_inputs, weather_inputs
+from dsfd.weather import WeatherSeries, interpolate
 
 #: Scalar boundary fields, in the column order of :attr:`StepTable.a`.
 FIELDS = ("t_out_k", "t_in_k", "t_mrt_k", "t_rad_out_k", "p_atm_pa", "wind_ms", "cp_bottom",
@@ -101,35 +100,12 @@ def weather_at(series: WeatherSeries, cfg: PanelConfig, times_s: np.ndarray,
                t_in_c: np.ndarray) -> WeatherInputs:
     """Weather interpolated linearly at instants ``times_s`` (held beyond the data ends).
 
-    Wind direction is interpolated on the circle (speed-weighted components), missing wind
-    becomes calm, missing pressure 101325 Pa (as :func:`dsfd.sim.replay.weather_inputs`).
+    Wind direction is interpolated on the circle (speed-weighted components); what is
+    missing gets the defaults of :func:`dsfd.physics.boundary.model_weather`, as in
+    :func:`dsfd.sim.replay.weather_inputs`.
     """
-    t = np.clip(np.asarray(times_s, float), series.time_s[0], series.time_s[-1])
-
-    def lin(name: str) -> np.ndarray:
-        return np.interp(t, series.time_s, getattr(series, name))
-
-    t_in = np.asarray(t_in_c, float) + T_ZERO
-    room = cfg.room
-    t_mrt = t_in if room.t_mrt_c is None else np.full_like(t_in, room.t_mrt_c + T_ZERO)
-    speed = lin("wind_speed_ms")
-    direction = _interp_wind_direction(t, series.time_s, series.wind_speed_ms,
-                                       series.wind_dir_deg)
-    pressure = lin("pressure_pa")
-    t_out_c = lin("t_out_c")
-    return WeatherInputs(
-        time_s=np.asarray(times_s, float),
-        t_out_k=t_out_c + T_ZERO,
-        ghi_wm2=lin("ghi_wm2"),
-        dni_wm2=lin("dni_wm2"),
-        dhi_wm2=lin("dhi_wm2"),
-        wind_speed_ms=np.nan_to_num(speed, nan=0.0),
-        wind_dir_deg=np.nan_to_num(direction, nan=cfg.facade.azimuth_deg),
-        pressure_pa=np.where(np.isfinite(pressure), pressure, 101325.0),
-        t_in_k=t_in,
-        t_mrt_k=t_mrt,
-        t_dew_k=_dew_point_k(t_out_c, lin("rh_pct")),
-    )
+    return series_inputs(np.asarray(times_s, float), interpolate(series, times_s), cfg,
+                         t_in_c=np.asarray(t_in_c, float))
 
 
 def station_ghi(cfg: PanelConfig, w: WeatherInputs) -> np.ndarray:
@@ -195,9 +171,8 @@ def lw_exchange_table(cfg: PanelConfig, options: PlantOptions,
 
 
 def _sky(cfg: PanelConfig, options: PlantOptions, w: WeatherInputs) -> np.ndarray:
-    dew = np.where(np.isfinite(w.t_dew_k), w.t_dew_k, w.t_out_k - 5.0)
     if "clark_allen" in (options.sky_model, cfg.model.sky_model):
-        t_sky = sky_temperature_clark_allen(w.t_out_k, dew, 0.0)
+        t_sky = sky_temperature_clark_allen(w.t_out_k, sky_dew_point_k(w), 0.0)
     else:
         t_sky = sky_temperature_swinbank(w.t_out_k)
     return exterior_radiant_temperature(w.t_out_k, t_sky)

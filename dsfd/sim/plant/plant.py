@@ -25,8 +25,8 @@ import numpy as np
 from scipy.integrate import Radau
 
 from dsfd.config.panel import PanelConfig
+from dsfd.physics.boundary import WeatherInputs
 from dsfd.physics.constants import T_ZERO
-from dsfd.physics.forcing import WeatherInputs
 from dsfd.sim.plant.actuators import (
     DAMPER_SHUT,
     Actuators,
