@@ -31,8 +31,8 @@ from collections.abc import Callable
 import numpy as np
 
 from dsfd.config.panel import PanelConfig
+from dsfd.config.parameters import CONVECTIVE_NAMES, FIT_NAMES
 from dsfd.estimation.calibration import offline_fit
-from dsfd.estimation.params import FIT_NAMES
 from dsfd.estimation.stepdata import model_config, step_data
 from dsfd.estimation.validation import STATES, replay_scores
 from dsfd.physics.model import LumpedModel
@@ -151,7 +151,7 @@ def paper_tables(cfg: PanelConfig, *, seed: int = 0, weather: str = WEATHER,
         "validation_days": float(validation_days),
         "drift_reflectance_per_day": DRIFT_REFLECTANCE_PER_DAY,
         "drift_h_ca2_per_day": DRIFT_H_PER_DAY,
-        **{f"truth.m_{k}": float(m) for k, m in zip(FIT_NAMES[:6], p.h_multipliers,
+        **{f"truth.m_{k}": float(m) for k, m in zip(CONVECTIVE_NAMES, p.h_multipliers,
                                                      strict=True)},
         "truth.f": float(p.f),
         **out,

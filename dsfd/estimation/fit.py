@@ -38,7 +38,7 @@ from scipy.linalg import solve_triangular
 from scipy.optimize import least_squares
 
 from dsfd.estimation.objective import OUTPUTS, WindowProblem
-from dsfd.estimation.params import I_C, I_F, I_N, N_PARAMS, ParameterSpace
+from dsfd.estimation.params import N_PARAMS, Param, ParameterSpace
 
 #: Forward-difference steps in φ: 1 % of θ for log coordinates, 0.01 for n, 1 W/m2 for
 #: the offsets — output changes of ~0.01 K, a hundred times the coupling tolerance of
@@ -259,7 +259,7 @@ def _posterior(jac: np.ndarray, residual: np.ndarray, a_prior: np.ndarray,
 
 
 #: The airflow parameters f, c, n (the first stage of :func:`fit_staged`).
-FLOW_PARAMETERS = (I_F, I_C, I_N)
+FLOW_PARAMETERS = (Param.F, Param.C, Param.N)
 TEMPERATURES = OUTPUTS[:5]  # x1..x5
 
 

@@ -30,14 +30,22 @@ from dataclasses import dataclass
 import numpy as np
 
 from dsfd.config.calibration import Calibration
-from dsfd.config.panel import PARAMETER_NAMES, PanelConfig
+from dsfd.config.panel import PanelConfig
+from dsfd.config.parameters import (
+    FIT_NAMES,
+    N_FIT,
+    N_PARAMS,
+    OFFSET_NAMES,
+    PARAMETER_NAMES,
+    Param,
+)
 from dsfd.physics.coupling import StepInputs
 
-OFFSET_NAMES: tuple[str, ...] = ("q_x1", "q_x2", "q_x3", "q_x4")
-FIT_NAMES: tuple[str, ...] = (*PARAMETER_NAMES, *OFFSET_NAMES)
-N_PARAMS = len(PARAMETER_NAMES)
-N_FIT = len(FIT_NAMES)
-I_H_CA2, I_F, I_C, I_N = (PARAMETER_NAMES.index(k) for k in ("h_ca2", "f", "c", "n"))
+__all__ = ["FIT_NAMES", "N_FIT", "N_PARAMS", "OFFSET_NAMES", "ORIFICE_REGIMES",
+           "PARAMETER_NAMES", "POWER_LAW_REGIMES", "Param", "ParameterSpace", "full_vector",
+           "with_offsets"]
+
+#: The offsets q in ϑ.
 I_Q = np.arange(N_PARAMS, N_FIT)
 #: Regimes whose flow law uses f (orifice paths) and c, n (power-law paths).
 ORIFICE_REGIMES = frozenset({1, 2, 3, 4, 9})
@@ -93,11 +101,9 @@ class ParameterSpace:
         s = settings or cfg.calibration
         p = cfg.parameters
         n_q = len(OFFSET_NAMES)
-        default = np.array([getattr(p, k).default for k in PARAMETER_NAMES] + [0.0] * n_q)
-        lower = np.array([getattr(p, k).lower for k in PARAMETER_NAMES]
-                         + [-s.offset_bound_wm2] * n_q)
-        upper = np.array([getattr(p, k).upper for k in PARAMETER_NAMES]
-                         + [s.offset_bound_wm2] * n_q)
+        default = np.array([*p.values("default"), *[0.0] * n_q])
+        lower = np.array([*p.values("lower"), *[-s.offset_bound_wm2] * n_q])
+        upper = np.array([*p.values("upper"), *[s.offset_bound_wm2] * n_q])
         is_log = np.array([k not in ("n", *OFFSET_NAMES) for k in FIT_NAMES])
         prior_sd = np.array([s.prior_sd_n if k == "n" else s.offset_sd_wm2 if k in OFFSET_NAMES
                              else s.prior_log_sd for k in FIT_NAMES])
@@ -106,11 +112,11 @@ class ParameterSpace:
         fixed = np.array([k in s.fixed for k in FIT_NAMES])
         regimes = set(cfg.openings.available_regimes())
         if cfg.louver is None:
-            fixed[[I_H_CA2, FIT_NAMES.index("q_x4")]] = True
+            fixed[[Param.H_CA2, Param.Q_X4]] = True
         if not regimes & ORIFICE_REGIMES:
-            fixed[I_F] = True
+            fixed[Param.F] = True
         if not regimes & POWER_LAW_REGIMES:
-            fixed[[I_C, I_N]] = True
+            fixed[[Param.C, Param.N]] = True
         if not s.heat_offsets:
             fixed[I_Q] = True
         return cls(default, lower, upper, is_log, prior_sd, drift_sd, fixed)
@@ -155,9 +161,9 @@ class ParameterSpace:
         present = set(np.unique(np.asarray(regimes, int)).tolist())
         free = ~self.fixed
         if not present & ORIFICE_REGIMES:
-            free[I_F] = False
+            free[Param.F] = False
         if not present & POWER_LAW_REGIMES:
-            free[[I_C, I_N]] = False
+            free[[Param.C, Param.N]] = False
         for i, name in zip(I_Q, OFFSET_NAMES, strict=True):
             if name[2:] not in measured:
                 free[i] = False

@@ -44,6 +44,7 @@ from typing import Literal
 import numpy as np
 
 from dsfd.config.panel import PanelConfig
+from dsfd.config.parameters import N_PARAMS
 from dsfd.control.objective import is_heating
 from dsfd.daemon.calibration import CalibrationStage
 from dsfd.daemon.clock import SimulatedClock, Slot
@@ -216,7 +217,7 @@ class ClosedLoopResult:
             "decide_ms_p99": float(np.percentile(d, 99)) if d.size else math.nan,
             "calibration_updates": self.calibration_updates,
             "by_condition": self.by_condition(*self.site),
-            "final_theta": [float(v) for v in self.final_theta[:9]],
+            "final_theta": [float(v) for v in self.final_theta[:N_PARAMS]],
             "wall_s": self.wall_s,
             "notes": list(self.notes),
         }

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from dsfd.config.parameters import N_FIT, N_PARAMS
 from dsfd.estimation.params import FIT_NAMES, ParameterSpace
 from dsfd.estimation.state import CalibrationState
 from dsfd.storage.calibration_file import (
@@ -29,10 +30,10 @@ def space(suwon):
 def state(space):
     rng = np.random.default_rng(0)
     theta = space.default * np.exp(0.1 * rng.standard_normal(space.default.size))
-    theta[9:] = [3.0, -1.5, 0.5, 0.0]
-    a = 0.01 * rng.standard_normal((13, 13))
+    theta[N_PARAMS:] = [3.0, -1.5, 0.5, 0.0]  # q_x1..q_x4
+    a = 0.01 * rng.standard_normal((N_FIT, N_FIT))
     return CalibrationState(panel_id="suwon-south", theta=space.clip(theta),
-                            cov_phi=a @ a.T + 1e-4 * np.eye(13), prior_theta=space.default,
+                            cov_phi=a @ a.T + 1e-4 * np.eye(N_FIT), prior_theta=space.default,
                             prior_sd_phi=space.prior_sd, last_update_s=1.6409e9, updates=42,
                             failed_updates=1, residuals_last=5208, cost_last=123.4,
                             free_last=("h_out", "f"))

@@ -25,12 +25,13 @@ import numpy as np
 from scipy.sparse import csc_matrix
 
 from dsfd.config.panel import PanelConfig
+from dsfd.config.parameters import CONVECTIVE_NAMES, Param
 from dsfd.physics.airflow import louver_flow_loss
 from dsfd.physics.constants import GRAVITY, R_AIR, SIGMA
 from dsfd.physics.forcing import TERRAIN_PROFILE
 from dsfd.sim.plant.actuators import Actuators
 from dsfd.sim.plant.advection import Advection2
-from dsfd.sim.plant.config import H_NAMES, PlantOptions, TrueParameters
+from dsfd.sim.plant.config import PlantOptions, TrueParameters
 from dsfd.sim.plant.convection import ConvectionGeometry, coefficients
 from dsfd.sim.plant.flow import (
     EB,
@@ -113,7 +114,7 @@ class PlantModel:
                           + 1.0 / gl.interior_inner.emissivity_front - 1.0)
         self.a_l = 2.0 * lv.slat_width_m / lv.slat_pitch_m if lv else 0.0
         self.gap = geo.depth / 2 if has_louver else geo.depth
-        self.h_default = np.array([getattr(cfg.parameters, k).default for k in H_NAMES])
+        self.h_default = np.array(cfg.parameters.values("default", CONVECTIVE_NAMES))
         # Local wind of each segment relative to the façade centre (power law,
         # docs/model.md#plant-heat-transfer).
         a_site, _ = TERRAIN_PROFILE[cfg.site.terrain]
@@ -305,21 +306,23 @@ class PlantModel:
         height = self.geo.height
         if opt.convection == "constant":
             h = hs * self.h_default
-            h1, h2o, h2i, h3, h_out, h_in = h[1], h[2], h[2], h[3], h[0], h[5]
+            h1, h2o, h2i, h3 = h[Param.H_CA1], h[Param.H_CA2], h[Param.H_CA2], h[Param.H_CA3]
+            h_out, h_in = h[Param.H_OUT], h[Param.H_IN]
         else:
             speed = abs(m_cav) / (fl["rho_mean"] * self.openings.cavity_area_m2)
             c = coefficients(self.conv_geo, t1, t2, t3, t4, to, ti, speed=speed,
                              upward=m_cav >= 0, p=p, t_out=t_out, t_in=t_in,
                              wind=wind * self.wind_profile, windward=ctx.windward,
                              gap_model=opt.dgu_gap == "iso15099")
-            h1, h2o, h2i, h3 = hs[1] * c.h1, hs[2] * c.h2o, hs[2] * c.h2i, hs[3] * c.h3
-            h_out, h_in = hs[0] * c.h_out, hs[5] * c.h_in
+            h1, h3 = hs[Param.H_CA1] * c.h1, hs[Param.H_CA3] * c.h3
+            h2o, h2i = hs[Param.H_CA2] * c.h2o, hs[Param.H_CA2] * c.h2i
+            h_out, h_in = hs[Param.H_OUT] * c.h_out, hs[Param.H_IN] * c.h_in
         if opt.dgu_gap == "constant_h":
-            h4 = hs[4] * self.h_default[4]
+            h4 = hs[Param.H_CA4] * self.h_default[Param.H_CA4]
         elif opt.convection == "constant":
-            h4 = hs[4] * 2.0 * iso15099_gap(t2, t3, self.dgu_gap, height, p)
+            h4 = hs[Param.H_CA4] * 2.0 * iso15099_gap(t2, t3, self.dgu_gap, height, p)
         else:
-            h4 = hs[4] * 2.0 * c.h_gap
+            h4 = hs[Param.H_CA4] * 2.0 * c.h_gap
         gs = self.gs
         g = self.gsl
         gs[g[0]] = h1
