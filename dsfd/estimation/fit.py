@@ -1,12 +1,12 @@
 """One bounded, robust, prior-regularised least-squares fit of θ on a window (Eq. 3).
 
-Minimises, over the free parameters φ_F (log θ; n linear) within the bounds,
+Minimises, over the free parameters z_F (log θ; n linear) within the bounds,
 
-    ½ Σ_j c² ρ(e_j(θ)²/c²)  +  ½ w (φ_F − φ̄_F)ᵀ P̄_F⁻¹ (φ_F − φ̄_F)
+    ½ Σ_j c² ρ(e_j(θ)²/c²)  +  ½ w (z_F − z̄_F)ᵀ P̄_F⁻¹ (z_F − z̄_F)
 
 with e the weighted multi-step residuals of :mod:`dsfd.estimation.objective`, ρ a robust
 loss with soft threshold c (``f_scale``), and the arrival cost of moving-horizon
-estimation (Rao, Rawlings & Mayne 2003): the previous estimate φ̄ with covariance P̄
+estimation (Rao, Rawlings & Mayne 2003): the previous estimate z̄ with covariance P̄
 summarises the data before the window, so parameters the window does not excite stay put.
 
 Notes
@@ -14,9 +14,9 @@ Notes
 * Robust loss: the data residuals are replaced by r̃ = c·sgn(e)·√ρ(e²/c²), so that
   Σ r̃² is the robust cost, with Jacobian scaled by dr̃/de = ρ'·|e|/(c√ρ) (the "square-root
   robustification" of Triggs et al. 2000, §4.3); the prior rows stay quadratic. ρ as in
-  ``scipy.optimize.least_squares``: soft_l1 2(√(1+z) − 1), huber, cauchy ln(1+z),
-  arctan(z). One wrong sample therefore pulls with a bounded force.
-* Jacobian: forward differences in φ, all perturbed θ as extra batch rows of ONE model
+  ``scipy.optimize.least_squares``: soft_l1 2(√(1+u) − 1), huber, cauchy ln(1+u),
+  arctan(u) of u = e²/c². One wrong sample therefore pulls with a bounded force.
+* Jacobian: forward differences in z, all perturbed θ as extra batch rows of ONE model
   rollout (:meth:`WindowProblem.predict`); backward at an upper bound.
 * Covariance: P = (J̃ᵀJ̃ / (s² m_r) + w P̄⁻¹)⁻¹ with s = 1.4826·median|r̃| (robust
   residual scale) and m_r the mean number of lead times per rollout — the residuals of one
@@ -40,37 +40,37 @@ from scipy.optimize import least_squares
 from dsfd.estimation.objective import OUTPUTS, WindowProblem
 from dsfd.estimation.params import N_PARAMS, Param, ParameterSpace
 
-#: Forward-difference steps in φ: 1 % of θ for log coordinates, 0.01 for n, 1 W/m2 for
+#: Forward-difference steps in z: 1 % of θ for log coordinates, 0.01 for n, 1 W/m2 for
 #: the offsets — output changes of ~0.01 K, a hundred times the coupling tolerance of
 #: the fit's rollouts (dsfd.estimation.objective.COUPLING_TOL_K).
 FD_STEP_LOG, FD_STEP_N, FD_STEP_OFFSET_WM2 = 1e-2, 1e-2, 1.0
 
 
-def robust_rho(z: np.ndarray, loss: str) -> tuple[np.ndarray, np.ndarray]:
-    """ρ(z) and ρ'(z) of the scipy losses (z = (e/c)²)."""
+def robust_rho(u: np.ndarray, loss: str) -> tuple[np.ndarray, np.ndarray]:
+    """ρ(u) and ρ'(u) of the scipy losses (u = (e/c)²)."""
     if loss == "linear":
-        return z, np.ones_like(z)
+        return u, np.ones_like(u)
     if loss == "soft_l1":
-        t = np.sqrt(1.0 + z)
+        t = np.sqrt(1.0 + u)
         return 2.0 * (t - 1.0), 1.0 / t
     if loss == "huber":
-        big = z > 1.0
-        rz = np.sqrt(np.where(big, z, 1.0))
-        return np.where(big, 2.0 * rz - 1.0, z), np.where(big, 1.0 / rz, 1.0)
+        big = u > 1.0
+        rz = np.sqrt(np.where(big, u, 1.0))
+        return np.where(big, 2.0 * rz - 1.0, u), np.where(big, 1.0 / rz, 1.0)
     if loss == "cauchy":
-        return np.log1p(z), 1.0 / (1.0 + z)
+        return np.log1p(u), 1.0 / (1.0 + u)
     if loss == "arctan":
-        return np.arctan(z), 1.0 / (1.0 + z * z)
+        return np.arctan(u), 1.0 / (1.0 + u * u)
     raise ValueError(f"unknown loss {loss!r}")
 
 
 def robustify(e: np.ndarray, loss: str, scale: float) -> tuple[np.ndarray, np.ndarray]:
     """r̃ = c sgn(e) √ρ(e²/c²) and dr̃/de (shape of ``e``)."""
-    z = (e / scale) ** 2
-    rho, drho = robust_rho(z, loss)
+    u = (e / scale) ** 2
+    rho, drho = robust_rho(u, loss)
     root = np.sqrt(np.clip(rho, 0.0, None))
     r = scale * np.sign(e) * root
-    small = z < 1e-12
+    small = u < 1e-12
     slope = np.where(small, 1.0, drho * np.abs(e) / (scale * np.where(small, 1.0, root)))
     return r, slope
 
@@ -83,8 +83,8 @@ class FitResult:
     ----------
     theta : ndarray (9,)
         Estimate (held parameters at the prior mean).
-    cov_phi : ndarray (9, 9)
-        Posterior covariance in φ for the free block, the prior elsewhere.
+    cov_z : ndarray (9, 9)
+        Posterior covariance in z for the free block, the prior elsewhere.
     free : ndarray (9,), bool
     cost : float
         Final robust cost (data + prior).
@@ -98,7 +98,7 @@ class FitResult:
     """
 
     theta: np.ndarray
-    cov_phi: np.ndarray
+    cov_z: np.ndarray
     free: np.ndarray
     cost: float
     cost_start: float
@@ -118,7 +118,7 @@ def _prior_rows(cov_free: np.ndarray, weight: float) -> np.ndarray:
     return np.sqrt(weight) * solve_triangular(chol, np.eye(p), lower=True)
 
 
-def fit_window(problem: WindowProblem, space: ParameterSpace, *, prior_phi: np.ndarray,
+def fit_window(problem: WindowProblem, space: ParameterSpace, *, prior_z: np.ndarray,
                prior_cov: np.ndarray, free: np.ndarray, loss: str, f_scale: float,
                prior_weight: float, max_nfev: int, broyden: int = 0,
                adaptive_scales: bool = False,
@@ -129,10 +129,10 @@ def fit_window(problem: WindowProblem, space: ParameterSpace, *, prior_phi: np.n
     ----------
     problem : WindowProblem
     space : ParameterSpace
-    prior_phi : array (9,)
-        Arrival-cost mean φ̄ (also the start point and the value of held parameters).
+    prior_z : array (9,)
+        Arrival-cost mean z̄ (also the start point and the value of held parameters).
     prior_cov : array (9, 9)
-        Arrival-cost covariance P̄ in φ.
+        Arrival-cost covariance P̄ in z.
     free : array (9,), bool
         Parameters the fit may move.
     loss, f_scale : str, float
@@ -156,19 +156,19 @@ def fit_window(problem: WindowProblem, space: ParameterSpace, *, prior_phi: np.n
     """
     free = np.asarray(free, bool)
     idx = np.flatnonzero(free)
-    prior_phi = np.asarray(prior_phi, float)
-    lo, hi = space.phi_lower[idx], space.phi_upper[idx]
+    prior_z = np.asarray(prior_z, float)
+    lo, hi = space.z_lower[idx], space.z_upper[idx]
     span = hi - lo
-    x0 = np.clip(prior_phi[idx], lo + 1e-6 * span, hi - 1e-6 * span)
+    x0 = np.clip(prior_z[idx], lo + 1e-6 * span, hi - 1e-6 * span)
     a_prior = _prior_rows(prior_cov[np.ix_(idx, idx)], prior_weight)
     fd = np.where(space.is_log, FD_STEP_LOG, np.where(np.arange(space.is_log.size) >= N_PARAMS,
                                                       FD_STEP_OFFSET_WM2, FD_STEP_N))[idx]
-    mean_f = prior_phi[idx]
+    mean_f = prior_z[idx]
 
     def theta_of(x: np.ndarray) -> np.ndarray:
-        phi = prior_phi.copy()
-        phi[idx] = x
-        return space.to_theta(phi)
+        z = prior_z.copy()
+        z[idx] = x
+        return space.to_theta(z)
 
     if adaptive_scales and problem.n_residuals:
         problem = problem.rescaled(problem.predict(theta_of(x0)[None])[0])
@@ -218,7 +218,7 @@ def fit_window(problem: WindowProblem, space: ParameterSpace, *, prior_phi: np.n
     if idx.size == 0 or problem.n_residuals == 0:
         r0 = fun(x0) if idx.size else np.zeros(0)
         c0 = 0.5 * float(r0 @ r0)
-        return FitResult(theta=space.to_theta(prior_phi), cov_phi=np.array(prior_cov),
+        return FitResult(theta=space.to_theta(prior_z), cov_z=np.array(prior_cov),
                          free=free, cost=c0, cost_start=c0, nfev=calls[0], njev=0,
                          n_residuals=problem.n_residuals, success=True,
                          message="nothing to fit")
@@ -235,7 +235,7 @@ def fit_window(problem: WindowProblem, space: ParameterSpace, *, prior_phi: np.n
     cov[idx, :] = 0.0
     cov[:, idx] = 0.0
     cov[np.ix_(idx, idx)] = _posterior(res.jac, res.fun, a_prior, problem)
-    return FitResult(theta=theta_of(x), cov_phi=cov, free=free, cost=float(min(res.cost, cost0)),
+    return FitResult(theta=theta_of(x), cov_z=cov, free=free, cost=float(min(res.cost, cost0)),
                      cost_start=cost0, nfev=calls[0], njev=int(res.njev or 0),
                      n_residuals=problem.n_residuals, success=bool(np.all(np.isfinite(x))),
                      message=str(res.message))
@@ -243,7 +243,7 @@ def fit_window(problem: WindowProblem, space: ParameterSpace, *, prior_phi: np.n
 
 def _posterior(jac: np.ndarray, residual: np.ndarray, a_prior: np.ndarray,
                problem: WindowProblem) -> np.ndarray:
-    """Covariance of the free φ from the final Jacobian and residuals (see module Notes)."""
+    """Covariance of the free z from the final Jacobian and residuals (see module Notes)."""
     m = problem.n_residuals
     j_data = np.asarray(jac)[:m]
     if j_data.shape[1] == 0:
@@ -263,7 +263,7 @@ FLOW_PARAMETERS = (Param.F, Param.C, Param.N)
 TEMPERATURES = OUTPUTS[:5]  # x1..x5
 
 
-def fit_staged(problem: WindowProblem, space: ParameterSpace, *, prior_phi: np.ndarray,
+def fit_staged(problem: WindowProblem, space: ParameterSpace, *, prior_z: np.ndarray,
                prior_cov: np.ndarray, free: np.ndarray, max_nfev: int, rounds: int = 1,
                **options) -> FitResult:
     """Flow parameters from the cavity speed, the rest from the temperatures.
@@ -271,7 +271,7 @@ def fit_staged(problem: WindowProblem, space: ParameterSpace, *, prior_phi: np.n
     Each round: stage 1 fits the free f, c, n to the |v| residuals alone (every other
     parameter held at its current value); stage 2 fits the free heat-transfer
     coefficients and offsets to the x1…x5 residuals alone, with f, c, n held at stage
-    1's estimate. Both stages keep the arrival cost of the prior (``prior_phi``,
+    1's estimate. Both stages keep the arrival cost of the prior (``prior_z``,
     ``prior_cov``). ``rounds`` > 1 alternates the stages towards their common solution,
     where each block is the least-squares estimate from its own measurements given the
     other (needed when the start is far off, e.g. an off-line fit from the defaults).
@@ -295,22 +295,22 @@ def fit_staged(problem: WindowProblem, space: ParameterSpace, *, prior_phi: np.n
     flow[list(FLOW_PARAMETERS)] = True
     speed = problem.only(("v",))
     if not (free & flow).any() or speed.n_residuals == 0:
-        return fit_window(problem, space, prior_phi=prior_phi, prior_cov=prior_cov,
+        return fit_window(problem, space, prior_z=prior_z, prior_cov=prior_cov,
                           free=free, max_nfev=max_nfev, **options)
     temperatures = problem.only(TEMPERATURES)
-    prior_phi = np.asarray(prior_phi, float)
-    start = prior_phi.copy()
+    prior_z = np.asarray(prior_z, float)
+    start = prior_z.copy()
     nfev = njev = 0
     cov_flow = cov_rest = None
     for _ in range(max(rounds, 1)):
-        first = _block(speed, space, start, prior_phi, prior_cov, free & flow, max_nfev,
+        first = _block(speed, space, start, prior_z, prior_cov, free & flow, max_nfev,
                        options)
-        start = space.to_phi(first.theta)
-        second = _block(temperatures, space, start, prior_phi, prior_cov, free & ~flow,
+        start = space.to_z(first.theta)
+        second = _block(temperatures, space, start, prior_z, prior_cov, free & ~flow,
                         max_nfev, options)
-        start = space.to_phi(second.theta)
+        start = space.to_z(second.theta)
         nfev, njev = nfev + first.nfev + second.nfev, njev + first.njev + second.njev
-        cov_flow, cov_rest = first.cov_phi, second.cov_phi
+        cov_flow, cov_rest = first.cov_z, second.cov_z
     assert cov_flow is not None and cov_rest is not None
     cov = np.array(cov_rest)
     fi = np.flatnonzero(free & flow)
@@ -318,7 +318,7 @@ def fit_staged(problem: WindowProblem, space: ParameterSpace, *, prior_phi: np.n
     cov[:, fi] = 0.0
     cov[np.ix_(fi, fi)] = cov_flow[np.ix_(fi, fi)]
     return FitResult(
-        theta=space.to_theta(start), cov_phi=cov, free=free,
+        theta=space.to_theta(start), cov_z=cov, free=free,
         cost=first.cost + second.cost, cost_start=first.cost_start + second.cost_start,
         nfev=nfev, njev=njev, n_residuals=first.n_residuals + second.n_residuals,
         success=first.success and second.success,
@@ -326,11 +326,11 @@ def fit_staged(problem: WindowProblem, space: ParameterSpace, *, prior_phi: np.n
 
 
 def _block(problem: WindowProblem, space: ParameterSpace, start: np.ndarray,
-           prior_phi: np.ndarray, prior_cov: np.ndarray, free: np.ndarray, max_nfev: int,
+           prior_z: np.ndarray, prior_cov: np.ndarray, free: np.ndarray, max_nfev: int,
            options: dict) -> FitResult:
     """Fit the ``free`` block from ``start`` (the other parameters held there), keeping the
-    arrival cost of ``prior_phi`` on the block."""
+    arrival cost of ``prior_z`` on the block."""
     # fit_window starts the free block at its prior mean and holds the rest there
-    held = np.where(free, prior_phi, start)
-    return fit_window(problem, space, prior_phi=held, prior_cov=prior_cov, free=free,
+    held = np.where(free, prior_z, start)
+    return fit_window(problem, space, prior_z=held, prior_cov=prior_cov, free=free,
                       max_nfev=max_nfev, **options)
