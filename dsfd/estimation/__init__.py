@@ -30,7 +30,7 @@ from dsfd.estimation.params import (
 )
 from dsfd.estimation.state import CalibrationState, CalibrationStateError, state_from_dict
 from dsfd.estimation.stepdata import StepData, model_config, step_data
-from dsfd.estimation.validation import replay_scores
+from dsfd.estimation.validation import ReplayScores, replay_scores
 
 __all__ = [
     "FIT_NAMES",
@@ -40,6 +40,7 @@ __all__ = [
     "ObserverTrack",
     "OnlineCalibrator",
     "ParameterSpace",
+    "ReplayScores",
     "StepData",
     "UpdateReport",
     "fill_state",
