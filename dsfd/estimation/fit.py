@@ -154,91 +154,124 @@ def fit_window(problem: WindowProblem, space: ParameterSpace, *, prior_z: np.nda
     -------
     FitResult
     """
-    free = np.asarray(free, bool)
-    idx = np.flatnonzero(free)
-    prior_z = np.asarray(prior_z, float)
-    lo, hi = space.z_lower[idx], space.z_upper[idx]
-    span = hi - lo
-    x0 = np.clip(prior_z[idx], lo + 1e-6 * span, hi - 1e-6 * span)
-    a_prior = _prior_rows(prior_cov[np.ix_(idx, idx)], prior_weight)
-    fd = np.where(space.is_log, FD_STEP_LOG, np.where(np.arange(space.is_log.size) >= N_PARAMS,
-                                                      FD_STEP_OFFSET_WM2, FD_STEP_N))[idx]
-    mean_f = prior_z[idx]
-
-    def theta_of(x: np.ndarray) -> np.ndarray:
-        z = prior_z.copy()
-        z[idx] = x
-        return space.to_theta(z)
-
-    if adaptive_scales and problem.n_residuals:
-        problem = problem.rescaled(problem.predict(theta_of(x0)[None])[0])
-
-    cache: dict[str, np.ndarray] = {}
-    calls = [0]
-    m = problem.n_residuals
-
-    def fun(x: np.ndarray) -> np.ndarray:
-        if "x" in cache and np.array_equal(cache["x"], x):
-            return cache["out"]
-        e = problem.residuals(theta_of(x))
-        r, slope = robustify(e, loss, f_scale)
-        out = np.concatenate([r, a_prior @ (x - mean_f)])
-        cache.update(x=x.copy(), e=e, slope=slope, out=out)
-        calls[0] += 1
-        if progress is not None:
-            progress(calls[0], max_nfev, 0.5 * float(out @ out))
-        return out
-
-    jac_state: dict[str, object] = {"since_fd": broyden}
-
-    def jac(x: np.ndarray) -> np.ndarray:
-        out = fun(x)
-        prev = jac_state.get("j")
-        if prev is not None and jac_state["since_fd"] < broyden:
-            # Broyden rank-one update of the data block (robustified residuals)
-            step_x = x - jac_state["x"]
-            ss = float(step_x @ step_x)
-            if ss > 0.0:
-                j_data = prev + np.outer(out[:m] - jac_state["r"] - prev @ step_x, step_x) / ss
-                jac_state.update(j=j_data, x=x.copy(), r=out[:m].copy(),
-                                 since_fd=jac_state["since_fd"] + 1)
-                return np.vstack([j_data, a_prior])
-        e, slope = cache["e"], cache["slope"]
-        step = np.where(x + fd <= hi, fd, -fd)
-        rows = []
-        for j in range(len(idx)):
-            xj = x.copy()
-            xj[j] += step[j]
-            rows.append(theta_of(xj))
-        pert = problem.residuals_of(problem.predict(np.array(rows)))
-        j_data = ((pert - e[None, :]) / step[:, None]).T * slope[:, None]
-        jac_state.update(j=j_data, x=x.copy(), r=out[:m].copy(), since_fd=0)
-        return np.vstack([j_data, a_prior])
-
+    objective = _WindowObjective(problem, space, prior_z=prior_z, prior_cov=prior_cov,
+                                 free=free, loss=loss, f_scale=f_scale,
+                                 prior_weight=prior_weight, broyden=broyden,
+                                 progress=progress, max_nfev=max_nfev)
+    if adaptive_scales:
+        objective.rescale()
+    problem, idx, x0 = objective.problem, objective.idx, objective.x0
     if idx.size == 0 or problem.n_residuals == 0:
-        r0 = fun(x0) if idx.size else np.zeros(0)
+        r0 = objective.residuals(x0) if idx.size else np.zeros(0)
         c0 = 0.5 * float(r0 @ r0)
-        return FitResult(theta=space.to_theta(prior_z), cov_z=np.array(prior_cov),
-                         free=free, cost=c0, cost_start=c0, nfev=calls[0], njev=0,
-                         n_residuals=problem.n_residuals, success=True,
+        return FitResult(theta=space.to_theta(objective.prior_z), cov_z=np.array(prior_cov),
+                         free=objective.free, cost=c0, cost_start=c0, nfev=objective.calls,
+                         njev=0, n_residuals=problem.n_residuals, success=True,
                          message="nothing to fit")
-    r0 = fun(x0)
+    r0 = objective.residuals(x0)
     cost0 = 0.5 * float(r0 @ r0)
     # The subspace solver ("lsmr") needs two free variables: with one, SciPy's 2-D trust
     # region indexes past a 1×1 matrix (IndexError); the dense SVD of an m×1 Jacobian is
     # trivial anyway.
-    res = least_squares(fun, x0, jac=jac, bounds=(lo, hi), method="trf", loss="linear",
+    res = least_squares(objective.residuals, x0, jac=objective.jacobian,
+                        bounds=(objective.lo, objective.hi), method="trf", loss="linear",
                         x_scale=space.prior_sd[idx], max_nfev=max_nfev, ftol=1e-5,
                         xtol=1e-5, gtol=1e-8, tr_solver="lsmr" if idx.size > 1 else "exact")
     x = res.x if res.cost <= cost0 else x0
     cov = np.array(prior_cov, float)
     cov[idx, :] = 0.0
     cov[:, idx] = 0.0
-    cov[np.ix_(idx, idx)] = _posterior(res.jac, res.fun, a_prior, problem)
-    return FitResult(theta=theta_of(x), cov_z=cov, free=free, cost=float(min(res.cost, cost0)),
-                     cost_start=cost0, nfev=calls[0], njev=int(res.njev or 0),
-                     n_residuals=problem.n_residuals, success=bool(np.all(np.isfinite(x))),
-                     message=str(res.message))
+    cov[np.ix_(idx, idx)] = _posterior(res.jac, res.fun, objective.a_prior, problem)
+    return FitResult(theta=objective.theta_of(x), cov_z=cov, free=objective.free,
+                     cost=float(min(res.cost, cost0)), cost_start=cost0, nfev=objective.calls,
+                     njev=int(res.njev or 0), n_residuals=problem.n_residuals,
+                     success=bool(np.all(np.isfinite(x))), message=str(res.message))
+
+
+class _WindowObjective:
+    """The least-squares problem of :func:`fit_window` in the free coordinates x = z[free]:
+    robustified data residuals stacked on the prior rows, and their Jacobian (forward
+    differences as one batched rollout, or Broyden updates in between)."""
+
+    def __init__(self, problem: WindowProblem, space: ParameterSpace, *, prior_z: np.ndarray,
+                 prior_cov: np.ndarray, free: np.ndarray, loss: str, f_scale: float,
+                 prior_weight: float, broyden: int,
+                 progress: Callable[[int, int, float], None] | None, max_nfev: int) -> None:
+        self.problem, self.space = problem, space
+        self.free = np.asarray(free, bool)
+        self.idx = idx = np.flatnonzero(self.free)
+        self.prior_z = np.asarray(prior_z, float)
+        self.lo, self.hi = space.z_lower[idx], space.z_upper[idx]
+        span = self.hi - self.lo
+        self.x0 = np.clip(self.prior_z[idx], self.lo + 1e-6 * span, self.hi - 1e-6 * span)
+        self.a_prior = _prior_rows(prior_cov[np.ix_(idx, idx)], prior_weight)
+        is_offset = np.arange(space.is_log.size) >= N_PARAMS
+        self.fd_step = np.where(space.is_log, FD_STEP_LOG,
+                                np.where(is_offset, FD_STEP_OFFSET_WM2, FD_STEP_N))[idx]
+        self.loss, self.f_scale = loss, f_scale
+        self.broyden = broyden
+        self.progress, self.max_nfev = progress, max_nfev
+        #: Residual evaluations so far (repeats of the last point are cached, not counted).
+        self.calls = 0
+        self._last: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
+        self._jac: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None  # J, x, r
+        self._since_fd = broyden
+
+    def theta_of(self, x: np.ndarray) -> np.ndarray:
+        z = self.prior_z.copy()
+        z[self.idx] = x
+        return self.space.to_theta(z)
+
+    def rescale(self) -> None:
+        """Each output's residual scale re-estimated at the start point."""
+        if self.problem.n_residuals:
+            start = self.problem.predict(self.theta_of(self.x0)[None])[0]
+            self.problem = self.problem.rescaled(start)
+
+    def residuals(self, x: np.ndarray) -> np.ndarray:
+        """Robustified data residuals, then the prior rows."""
+        if self._last is not None and np.array_equal(self._last[0], x):
+            return self._last[3]
+        e = self.problem.residuals(self.theta_of(x))
+        r, slope = robustify(e, self.loss, self.f_scale)
+        out = np.concatenate([r, self.a_prior @ (x - self.prior_z[self.idx])])
+        self._last = (x.copy(), e, slope, out)
+        self.calls += 1
+        if self.progress is not None:
+            self.progress(self.calls, self.max_nfev, 0.5 * float(out @ out))
+        return out
+
+    def jacobian(self, x: np.ndarray) -> np.ndarray:
+        out = self.residuals(x)
+        m = self.problem.n_residuals
+        if self._jac is not None and self._since_fd < self.broyden:
+            # Broyden rank-one update of the data block (robustified residuals)
+            prev, x_prev, r_prev = self._jac
+            step_x = x - x_prev
+            ss = float(step_x @ step_x)
+            if ss > 0.0:
+                j_data = prev + np.outer(out[:m] - r_prev - prev @ step_x, step_x) / ss
+                self._jac = (j_data, x.copy(), out[:m].copy())
+                self._since_fd += 1
+                return np.vstack([j_data, self.a_prior])
+        j_data = self._finite_differences(x)
+        self._jac = (j_data, x.copy(), out[:m].copy())
+        self._since_fd = 0
+        return np.vstack([j_data, self.a_prior])
+
+    def _finite_differences(self, x: np.ndarray) -> np.ndarray:
+        """Forward differences (backward at an upper bound), all perturbed θ as extra batch
+        rows of one rollout."""
+        assert self._last is not None  # residuals(x) was just evaluated
+        _, e, slope, _ = self._last
+        step = np.where(x + self.fd_step <= self.hi, self.fd_step, -self.fd_step)
+        rows = []
+        for j in range(len(self.idx)):
+            xj = x.copy()
+            xj[j] += step[j]
+            rows.append(self.theta_of(xj))
+        pert = self.problem.residuals_of(self.problem.predict(np.array(rows)))
+        return ((pert - e[None, :]) / step[:, None]).T * slope[:, None]
 
 
 def _posterior(jac: np.ndarray, residual: np.ndarray, a_prior: np.ndarray,
