@@ -88,11 +88,13 @@ def print_tables(scores: ReplayScores, models: list[tuple[str, str]],
             row = "".join(_cell(scores.mae_c(m, h, s)) for m, _ in models)
             print(f"{s:<8}{row}{_cell(meas)}")
     print_paired(scores, [m for m, _ in models if m != "online"], horizons, states)
-    if scores.velocity:
+    regimes = sorted(scores.velocity)
+    if regimes:
         print("\nTable 1 — mean absolute difference of the cavity speed |v|, one step ahead "
               "[cm/s]")
         print(f"{'regime':<8}{head}{'measured':>10}{'samples':>9}")
-        for r, v in sorted(scores.velocity.items()):
+        for r in regimes:
+            v = scores.velocity[r]
             row = "".join(_cell(v.mae_cms.get(m)) for m, _ in models)
             print(f"{r:<8}{row}{_cell(v.measured_mean_cms)}{v.samples:9d}")
     else:
@@ -155,16 +157,16 @@ def run(args: argparse.Namespace) -> int:
     missing = [s for s in ("x1", "x2", "x3", "x4", "x5", "v") if s not in steps.present]
     if missing:
         print(f"  not measured (skipped): {', '.join(missing)}")
-    scores = replay_scores(cfg, steps, offline_theta=offline, horizons=horizons,
-                           warmup_h=args.warmup_h, online=not args.no_online,
-                           progress=None if args.no_online else _Progress())
-    scored = scores.scored_models()
-    models = [(m, label) for m, label in MODELS if m in scored]
-    print(f"scored {scores.scored_starts} start rows; self-calibration updates: "
-          f"{scores.online_updates}")
-    print_tables(scores, models, horizons, steps.step_s)
+    out = replay_scores(cfg, steps, offline_theta=offline, horizons=horizons,
+                        warmup_h=args.warmup_h, online=not args.no_online,
+                        progress=None if args.no_online else _Progress())
+    models = [(m, label) for m, label in MODELS
+              if m in out.scored_models()]
+    print(f"scored {out.scored_starts} start rows; self-calibration updates: "
+          f"{out.online_updates}")
+    print_tables(out, models, horizons, steps.step_s)
     if args.json:
-        doc = {"panel": cfg.panel.id, "data": str(args.data), **scores.flat()}
+        doc = {"panel": cfg.panel.id, "data": str(args.data), **out.flat()}
         args.json.parent.mkdir(parents=True, exist_ok=True)
         args.json.write_text(json.dumps(doc, indent=1))
         print(f"\nwrote {args.json}")
