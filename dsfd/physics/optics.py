@@ -127,6 +127,8 @@ def _glass_diffuse(
     return h1, h2, h3, system
 
 
+# long: 103 lines, 72 of them the docstring, which derives the balance the code solves; the
+# code itself is the three named steps below it (_beam_pass, _sky_and_ground, _diffuse_fluxes).
 def layer_absorption(
     *,
     beam: ArrayLike,
