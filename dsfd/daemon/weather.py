@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dsfd.config.panel import PanelConfig
+from dsfd.config.panel import PanelConfig, Room
 from dsfd.control.forecast import persistence_forecast
 from dsfd.drivers.base import Sample
 from dsfd.physics.boundary import WeatherInputs, model_weather
@@ -65,18 +65,19 @@ class CycleWeather:
     room_source: str
 
 
-def room_temperature(cfg: PanelConfig, sample: Sample) -> tuple[float, str]:
-    """Room air temperature [degC] and where it came from (``sensor`` or ``config``)."""
-    source = cfg.daemon.room_temperature_source
+def room_temperature(sample: Sample, *, source: str, room: Room) -> tuple[float, str]:
+    """Room air temperature [degC] and where it came from (``sensor`` or ``config``), by
+    ``daemon.room_temperature_source`` (``source``) and the panel's ``room`` section."""
     measured = sample.good("t_room_c")
     if source != "config" and measured is not None:
         return measured, "sensor"
-    return cfg.room.t_in_c, "config"
+    return room.t_in_c, "config"
 
 
 def measured_weather(cfg: PanelConfig, sample: Sample) -> CycleWeather:
     """Weather of the interval ending at ``sample.time_s`` (see module docstring)."""
-    t_room_c, room_source = room_temperature(cfg, sample)
+    t_room_c, room_source = room_temperature(
+        sample, source=cfg.daemon.room_temperature_source, room=cfg.room)
     missing = tuple(n for n in REQUIRED_WEATHER if sample.good(n) is None)
     if missing:
         return CycleWeather(None, None, missing, (), t_room_c, room_source)

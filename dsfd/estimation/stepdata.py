@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dsfd.config.panel import PanelConfig
+from dsfd.config.panel import Facade, PanelConfig, Room
 from dsfd.measured import MeasuredData, MeasuredDataError, iso_utc
 from dsfd.physics.boundary import WeatherInputs, model_weather
 from dsfd.physics.constants import T_ZERO
@@ -129,9 +129,10 @@ def _controls(cfg: PanelConfig, data: MeasuredData, notes: list[str]):
     return afr.astype(int), np.radians(phi), np.clip(or_, 0.0, 1.0)
 
 
-def weather_of_steps(cfg: PanelConfig, data: MeasuredData,
+def weather_of_steps(data: MeasuredData, *, room: Room, facade: Facade,
                      notes: list[str] | None = None) -> WeatherInputs:
-    """Weather of each step (from the row that ends it) at the step midpoints, SI units."""
+    """Weather of each step (from the row that ends it) at the step midpoints, SI units,
+    for a panel with these ``room`` and ``facade`` sections (what was not measured)."""
     notes = [] if notes is None else notes
     src = data.source or "measured data"
     t_rows = data.time_s
@@ -156,7 +157,7 @@ def weather_of_steps(cfg: PanelConfig, data: MeasuredData,
         room_rows = _filled(t_rows, data.get("t_room_c"))
         t_in_c = 0.5 * (room_rows[:-1] + room_rows[1:])
     else:
-        notes.append(f"no t_room_c column: room at {cfg.room.t_in_c:g} degC")
+        notes.append(f"no t_room_c column: room at {room.t_in_c:g} degC")
 
     def optional(name: str, fill: bool = True) -> np.ndarray | None:
         if not data.has(name):
@@ -172,7 +173,7 @@ def weather_of_steps(cfg: PanelConfig, data: MeasuredData,
         rh_pct=optional("rh_pct", fill=False), t_in_c=t_in_c,
         poa_global_wm2=filled("poa_wm2") if poa_ok else None,
         poa_diffuse_wm2=filled("poa_diffuse_wm2") if poa_ok else None,
-        room=cfg.room, facade_azimuth_deg=cfg.facade.azimuth_deg)
+        room=room, facade_azimuth_deg=facade.azimuth_deg)
 
 
 def step_data(cfg: PanelConfig, data: MeasuredData) -> StepData:
@@ -193,7 +194,7 @@ def step_data(cfg: PanelConfig, data: MeasuredData) -> StepData:
     notes: list[str] = []
     step_s = data.step_s
     regime, phi, or_ = _controls(cfg, data, notes)
-    weather = weather_of_steps(cfg, data, notes)
+    weather = weather_of_steps(data, room=cfg.room, facade=cfg.facade, notes=notes)
     forcing = facade_forcing(cfg, weather)
     column = Forcing(*(np.asarray(v)[:, None] for v in forcing))
     loads = FacadeOptics(cfg).loads(column, phi[:-1])

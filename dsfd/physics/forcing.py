@@ -125,7 +125,7 @@ def facade_forcing(cfg: PanelConfig, w: WeatherInputs, *,
         front = (fi.aoi_deg < 90.0) & ~below
         beam = np.where(use, np.where(front, np.clip(total - diff, 0.0, None), 0.0), beam)
         diffuse = np.where(use, np.where(front, diff, total), diffuse)
-    geom = AirflowGeometry.from_panel(cfg)
+    geom = AirflowGeometry.from_sections(cfg.openings, cfg.facade)
     cp_b, cp_t = geom.wind_pressure_coefficients(w.wind_dir_deg, fac.azimuth_deg)
     return Forcing(
         time_s=np.asarray(w.time_s, float),

@@ -102,7 +102,7 @@ def network_constants(cfg: PanelConfig) -> NetworkConstants:
         eps_l3_back=gl.interior_inner.emissivity_back,
         h_r23_factor=1.0 / (1.0 / gl.interior_outer.emissivity_back
                             + 1.0 / gl.interior_inner.emissivity_front - 1.0),
-        geom=AirflowGeometry.from_panel(cfg),
+        geom=AirflowGeometry.from_sections(cfg.openings, cfg.facade),
         dt=mo.step_s,
         cp_air=cp_a,
         coupling=mo.coupling,

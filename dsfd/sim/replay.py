@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from dsfd.config.panel import PanelConfig
+from dsfd.config.panel import Facade, PanelConfig, Room
 from dsfd.physics.boundary import WeatherInputs, model_weather
 from dsfd.weather import (
     BUNDLED_WEATHER,
@@ -65,12 +65,12 @@ def weather_inputs(series: WeatherSeries, cfg: PanelConfig, *, start_s: float, n
                    t_in_c: float | np.ndarray | None = None) -> WeatherInputs:
     """Model-step weather (midpoints, kelvin) for the panel, room from config unless given."""
     rs = resample(series, start_s=start_s, step_s=cfg.model.step_s, n_steps=n_steps)
-    return series_inputs(rs.time_s, {name: getattr(rs, name) for name in CHANNELS}, cfg,
-                         t_in_c=t_in_c)
+    return series_inputs(rs.time_s, {name: getattr(rs, name) for name in CHANNELS},
+                         room=cfg.room, facade=cfg.facade, t_in_c=t_in_c)
 
 
-def series_inputs(time_s: np.ndarray, channels: Mapping[str, np.ndarray], cfg: PanelConfig, *,
-                  t_in_c: float | np.ndarray | None = None) -> WeatherInputs:
+def series_inputs(time_s: np.ndarray, channels: Mapping[str, np.ndarray], *, room: Room,
+                  facade: Facade, t_in_c: float | np.ndarray | None = None) -> WeatherInputs:
     """:func:`~dsfd.physics.boundary.model_weather` of a weather series' channels.
 
     ``channels`` maps the names of :data:`dsfd.weather.series.CHANNELS` to values at
@@ -82,4 +82,4 @@ def series_inputs(time_s: np.ndarray, channels: Mapping[str, np.ndarray], cfg: P
         dni_wm2=channels["dni_wm2"], dhi_wm2=channels["dhi_wm2"],
         wind_speed_ms=channels["wind_speed_ms"], wind_dir_deg=channels["wind_dir_deg"],
         pressure_pa=channels["pressure_pa"], rh_pct=channels["rh_pct"], t_in_c=t_in_c,
-        room=cfg.room, facade_azimuth_deg=cfg.facade.azimuth_deg, clip_negative=False)
+        room=room, facade_azimuth_deg=facade.azimuth_deg, clip_negative=False)

@@ -30,7 +30,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dsfd.config.panel import PanelConfig
+from dsfd.config.panel import Facade, Louver, PanelConfig, Site
 from dsfd.physics.airflow import AirflowGeometry
 from dsfd.physics.boundary import WeatherInputs, sky_dew_point_k
 from dsfd.physics.forcing import FacadeOptics, facade_forcing, local_wind_speed
@@ -104,17 +104,17 @@ def weather_at(series: WeatherSeries, cfg: PanelConfig, times_s: np.ndarray,
     missing gets the defaults of :func:`dsfd.physics.boundary.model_weather`, as in
     :func:`dsfd.sim.replay.weather_inputs`.
     """
-    return series_inputs(np.asarray(times_s, float), interpolate(series, times_s), cfg,
-                         t_in_c=np.asarray(t_in_c, float))
+    return series_inputs(np.asarray(times_s, float), interpolate(series, times_s),
+                         room=cfg.room, facade=cfg.facade, t_in_c=np.asarray(t_in_c, float))
 
 
-def station_ghi(cfg: PanelConfig, w: WeatherInputs) -> np.ndarray:
+def station_ghi(site: Site, w: WeatherInputs) -> np.ndarray:
     """Global horizontal irradiance of the plant's own sky [W/m2], what its pyranometer sees.
 
     Parameters
     ----------
-    cfg : PanelConfig
-        The panel (its site gives the sun).
+    site : Site
+        The panel's site (where the sun is).
     w : WeatherInputs
         Weather at the plant (:func:`weather_at`).
 
@@ -132,17 +132,16 @@ def station_ghi(cfg: PanelConfig, w: WeatherInputs) -> np.ndarray:
     about −9 % and −20 %; within 1.5 % from 9 to 12 h), so a station fed that channel would
     tell the controller of a weaker sun than the one heating the plant.
     """
-    sun = solar_position(w.time_s, cfg.site.latitude_deg, cfg.site.longitude_deg)
+    sun = solar_position(w.time_s, site.latitude_deg, site.longitude_deg)
     # a horizontal plane's angle of incidence is the zenith angle
     closure = beam_on_surface(w.dni_wm2, sun.zenith_deg) + np.asarray(w.dhi_wm2, float)
     ghi = np.where(np.isfinite(closure), closure, np.asarray(w.ghi_wm2, float))
     return np.clip(np.nan_to_num(ghi), 0.0, None)
 
 
-def fine_louver(cfg: PanelConfig, options: PlantOptions, d_rho: float = 0.0,
+def fine_louver(lv: Louver | None, options: PlantOptions, d_rho: float = 0.0,
                 band: str = "solar") -> LouverOptics | None:
     """The louver with M = ``options.optics_segments`` and the slat thickness correction."""
-    lv = cfg.louver
     if lv is None:
         return None
     base = LouverOptics.from_config(lv, band=band, segments=options.optics_segments,
@@ -163,7 +162,7 @@ def lw_exchange_table(cfg: PanelConfig, options: PlantOptions,
     phi = np.radians(np.asarray(phis_deg, float))
     if options.radiation == "three_layer" or cfg.louver is None:
         return FacadeOptics(cfg).lw_exchange(phi)
-    ir = fine_louver(cfg, options).infrared(phi)
+    ir = fine_louver(cfg.louver, options).infrared(phi)
     gl = cfg.glazing
     r = cavity_exchange_matrix(gl.exterior.emissivity_back, ir.eps_L, ir.tau_L,
                                gl.interior_outer.emissivity_front)
@@ -178,8 +177,8 @@ def _sky(cfg: PanelConfig, options: PlantOptions, w: WeatherInputs) -> np.ndarra
     return exterior_radiant_temperature(w.t_out_k, t_sky)
 
 
-def _windward(cfg: PanelConfig, w: WeatherInputs) -> np.ndarray:
-    rel = np.asarray(w.wind_dir_deg, float) - cfg.facade.azimuth_deg
+def _windward(facade: Facade, w: WeatherInputs) -> np.ndarray:
+    rel = np.asarray(w.wind_dir_deg, float) - facade.azimuth_deg
     return np.abs((rel + 180.0) % 360.0 - 180.0) <= WINDWARD_LIMIT_DEG
 
 
@@ -193,7 +192,7 @@ def _knots_lumped(cfg: PanelConfig, options: PlantOptions, w: WeatherInputs,
                         f.cp_bottom, f.cp_top], axis=-1)
     sources = np.concatenate([loads.sources, loads.q_trans_wm2[..., None],
                               loads.q_da_w[..., None] / optics.area], axis=-1)
-    return _Knots(scalars, np.moveaxis(sources, 0, 1), _windward(cfg, w),
+    return _Knots(scalars, np.moveaxis(sources, 0, 1), _windward(cfg.facade, w),
                   f.beam_wm2 + f.diffuse_wm2)
 
 
@@ -231,13 +230,13 @@ def _knots_fine(cfg: PanelConfig, options: PlantOptions, w: WeatherInputs,
     q_da = optics.loads(facade_forcing(cfg, w), phis_rad).q_da_w / optics.area
     sources = np.stack([np.broadcast_to(s, (m, n)) for s in (sol.s1, sol.s2, sol.s3, sol.s4,
                                                              sol.transmitted, q_da)], axis=-1)
-    geom = AirflowGeometry.from_panel(cfg)
+    geom = AirflowGeometry.from_sections(cfg.openings, cfg.facade)
     cp_b, cp_t = geom.wind_pressure_coefficients(w.wind_dir_deg, fac.azimuth_deg)
     wind = local_wind_speed(w.wind_speed_ms, terrain=site.terrain,
                             height_m=site.facade_height_m)
     scalars = np.stack([w.t_out_k, w.t_in_k, w.t_mrt_k, _sky(cfg, options, w), w.pressure_pa,
                         wind, cp_b, cp_t], axis=-1)
-    return _Knots(scalars, np.moveaxis(sources, 0, 1), _windward(cfg, w),
+    return _Knots(scalars, np.moveaxis(sources, 0, 1), _windward(cfg.facade, w),
                   fi.beam + sky + ground)
 
 
@@ -298,7 +297,7 @@ class ForcingTables:
                                                       0.0, 0.95))))
         if opt.optics == "lumped":
             return _knots_lumped(cfg, opt, w, self.phis_rad)
-        return _knots_fine(cfg, opt, w, self.phis_rad, fine_louver(cfg, opt))
+        return _knots_fine(cfg, opt, w, self.phis_rad, fine_louver(cfg.louver, opt))
 
     def _weather(self, sun_t: np.ndarray, weather_t: np.ndarray | None,
                  mid: WeatherInputs | None) -> WeatherInputs:
