@@ -26,7 +26,7 @@ from dsfd.config.calibration import Calibration
 from dsfd.estimation.fit import FitResult, fit_staged, fit_window
 from dsfd.estimation.objective import WindowProblem, window_problem
 from dsfd.estimation.observer import observe, observer_step
-from dsfd.estimation.params import FIT_NAMES, I_Q, N_PARAMS, ParameterSpace
+from dsfd.estimation.params import FIT_NAMES, I_Q, N_PARAMS, ParameterSpace, full_vector
 from dsfd.estimation.state import CalibrationState
 from dsfd.estimation.stepdata import StepData
 from dsfd.physics.model import LumpedModel
@@ -107,8 +107,20 @@ class OnlineCalibrator:
 
     @property
     def theta(self) -> np.ndarray:
-        """Current estimate θ̂ (copy)."""
+        """Current estimate of the fit vector ϑ̂ = (θ̂, q̂) (copy)."""
         return self.state.theta.copy()
+
+    @property
+    def model_theta(self) -> np.ndarray:
+        """The model parameters θ̂ (9,) of the current estimate (what the model, the observer
+        and the optimiser take as ``theta``)."""
+        return full_vector(self.state.theta)[:N_PARAMS].copy()
+
+    @property
+    def heat_offsets_wm2(self) -> np.ndarray:
+        """The heat-flux offsets q̂ (4,) [W/m2] of the current estimate (the optimiser's
+        ``ControlProblem.heat_offsets_wm2``)."""
+        return full_vector(self.state.theta)[N_PARAMS:].copy()
 
     def due(self, now_s: float, data_start_s: float) -> bool:
         """True when an update is due at ``now_s`` [s] with data since ``data_start_s``."""
