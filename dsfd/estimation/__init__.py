@@ -15,8 +15,10 @@ Pure core (no files, sockets, clocks or logging configuration):
 
 Files: :mod:`dsfd.storage.calibration_file`. Settings: ``calibration:`` of the panel
 (:class:`dsfd.config.calibration.Calibration`). A consumer of the calibrated model uses
-``theta[:9]`` as the model parameters and adds the offsets ``theta[9:]`` to the absorbed
-short-wave of its inputs (:func:`~dsfd.estimation.params.with_offsets`).
+θ (:attr:`OnlineCalibrator.model_theta`) as the model parameters and adds the offsets q
+(:attr:`OnlineCalibrator.heat_offsets_wm2`) to the absorbed short-wave of its inputs
+(:func:`~dsfd.estimation.params.with_offsets`); components by name:
+:class:`dsfd.config.parameters.Param`.
 """
 
 from dsfd.estimation.calibration import OnlineCalibrator, UpdateReport, offline_fit, window_start
