@@ -10,9 +10,13 @@ The Python API (the README's "Python API" section has a worked example)::
     decision = dsfd.MpcOptimiser(panel).decide(problem)              # ControlProblem → Decision
 
 Panels and weather
-    :func:`load_panel`, :class:`PanelConfig`, :class:`ConfigError`; :func:`load_weather`
-    (bundled name or file), :func:`read_weather`, :class:`WeatherSeries`,
-    :func:`weather_inputs` and :func:`facade_forcing` (weather → the façade's boundary).
+    :func:`load_panel`, :class:`PanelConfig`, :class:`ConfigError`; :class:`Param`,
+    :data:`PARAMETER_NAMES`, :data:`FIT_NAMES` (the calibrated parameters by name);
+    :func:`load_weather` (bundled name or file), :func:`read_weather`, :class:`WeatherSeries`,
+    :func:`at_site` (replayed at the panel's longitude), :func:`weather_inputs` (a series
+    in model steps), :func:`model_weather` and :class:`WeatherInputs` (any measured or
+    forecast weather → the model's weather, the defaults stated once), :func:`facade_forcing`
+    (weather → the façade's boundary).
 The model
     :class:`LumpedModel`, :class:`FacadeOptics`, :class:`Forcing`.
 Control
@@ -45,7 +49,13 @@ _API: dict[str, str] = {
     "WeatherSeries": "dsfd.weather",
     "read_weather": "dsfd.weather",
     "load_weather": "dsfd.sim.replay",
+    "at_site": "dsfd.sim.replay",
     "weather_inputs": "dsfd.sim.replay",
+    "WeatherInputs": "dsfd.physics.boundary",
+    "model_weather": "dsfd.physics.boundary",
+    "Param": "dsfd.config.parameters",
+    "FIT_NAMES": "dsfd.config.parameters",
+    "PARAMETER_NAMES": "dsfd.config.parameters",
     "Forcing": "dsfd.physics.forcing",
     "FacadeOptics": "dsfd.physics.forcing",
     "facade_forcing": "dsfd.physics.forcing",
@@ -68,6 +78,8 @@ _API: dict[str, str] = {
 }
 
 __all__ = [
+    "FIT_NAMES",
+    "PARAMETER_NAMES",
     "ConfigError",
     "ControlProblem",
     "Decision",
@@ -78,15 +90,19 @@ __all__ = [
     "MpcOptimiser",
     "OnlineCalibrator",
     "PanelConfig",
+    "Param",
     "Plant",
     "PlantOptions",
     "StepData",
     "TrueParameters",
+    "WeatherInputs",
     "WeatherSeries",
     "__version__",
+    "at_site",
     "facade_forcing",
     "load_panel",
     "load_weather",
+    "model_weather",
     "observe",
     "offline_fit",
     "read_measured",
@@ -113,15 +129,17 @@ def __dir__() -> list[str]:
 
 if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerly
     from dsfd.config import ConfigError, PanelConfig, load_panel
+    from dsfd.config.parameters import FIT_NAMES, PARAMETER_NAMES, Param
     from dsfd.control.baseline import rule_decision
     from dsfd.control.optimiser import ControlProblem, Decision, MpcOptimiser
     from dsfd.estimation import OnlineCalibrator, StepData, observe, offline_fit, step_data
     from dsfd.measured import MeasuredData
+    from dsfd.physics.boundary import WeatherInputs, model_weather
     from dsfd.physics.forcing import FacadeOptics, Forcing, facade_forcing
     from dsfd.physics.model import LumpedModel
     from dsfd.sim.plant.config import PlantOptions, TrueParameters
     from dsfd.sim.plant.plant import Plant
-    from dsfd.sim.replay import load_weather, weather_inputs
+    from dsfd.sim.replay import at_site, load_weather, weather_inputs
     from dsfd.sim.truth_run import run_truth
     from dsfd.storage.measured_csv import read_measured
     from dsfd.weather import WeatherSeries, read_weather

@@ -16,6 +16,7 @@ import time
 import numpy as np
 
 from dsfd.config.panel import PanelConfig
+from dsfd.config.parameters import Param
 from dsfd.estimation.calibration import OnlineCalibrator
 from dsfd.estimation.observer import observe
 from dsfd.estimation.stepdata import StepData
@@ -52,7 +53,7 @@ def synthetic_window(cfg: PanelConfig, *, seed: int = 0, hours: float = WINDOW_H
     inp = StepInputs(*(np.asarray(v)[:, 0] for v in inp))
     model = LumpedModel(cfg)
     theta = model.default_theta() * TRUE_FACTORS
-    theta[8] = min(theta[8], cfg.parameters.n.upper)
+    theta[Param.N] = min(theta[Param.N], cfg.parameters.n.upper)
     x0 = model.steady_state([reg[0]], 1.0, inp.at((slice(0, 1),)), theta)
     tr = model.rollout(x0, reg[None], np.ones((1, n)), inp, theta)
     y = tr.x[0, :, :5] + noise_k * rng.standard_normal((n + 1, 5))

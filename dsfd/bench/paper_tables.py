@@ -27,14 +27,15 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
 from dsfd.config.panel import PanelConfig
+from dsfd.config.parameters import CONVECTIVE_NAMES, FIT_NAMES
 from dsfd.estimation.calibration import offline_fit
-from dsfd.estimation.params import FIT_NAMES
 from dsfd.estimation.stepdata import model_config, step_data
-from dsfd.estimation.validation import STATES, replay_scores
+from dsfd.estimation.validation import STATES, ReplayScores, replay_scores
 from dsfd.physics.model import LumpedModel
 from dsfd.sim.plant.config import PlantOptions, TrueParameters
 from dsfd.sim.replay import load_weather
@@ -68,31 +69,48 @@ def plant_options() -> PlantOptions:
                         drift_h_name=DRIFT_H_NAME, drift_h_per_day=DRIFT_H_PER_DAY)
 
 
-def criteria(out: dict[str, float]) -> dict[str, float]:
+def criteria(scores: ReplayScores) -> dict[str, float]:
     """Issue 4 acceptance checks on the scores (1.0 = met, 0.0 = not met)."""
     c: dict[str, float] = {}
-    c["criterion.online_h1_mean_le_0.47"] = float(out["online.h1.mean_mae_c"] <= LIMIT_H1_C)
-    c["criterion.online_h15_mean_le_1.0"] = float(out["online.h15.mean_mae_c"] <= LIMIT_H15_C)
+    c["criterion.online_h1_mean_le_0.47"] = float(
+        scores.horizons[1].mean_mae_c["online"] <= LIMIT_H1_C)
+    c["criterion.online_h15_mean_le_1.0"] = float(
+        scores.horizons[15].mean_mae_c["online"] <= LIMIT_H15_C)
     for h in HORIZONS:
+        mae, pairs = scores.horizons[h].mae_c, scores.horizons[h].paired.get("offline", {})
         c[f"criterion.online_beats_offline_every_state_h{h}"] = float(all(
-            out[f"online.h{h}.{s}_mae_c"] < out[f"offline.h{h}.{s}_mae_c"] for s in STATES))
+            mae["online"][s] < mae["offline"][s] for s in STATES))
         # the strict ranking above, and whether any loss is larger than its noise
         c[f"criterion.online_no_significant_loss_to_offline_h{h}"] = float(all(
-            out.get(f"online_vs_offline.h{h}.{s}_mae_diff_c", np.inf)
-            < 2.0 * out.get(f"online_vs_offline.h{h}.{s}_mae_diff_se_c", 0.0) for s in STATES))
+            diff < 2.0 * se for diff, se in (pairs.get(s, (np.inf, 0.0)) for s in STATES)))
     c["criterion.online_beats_persistence_h15"] = float(
-        out["online.h15.mean_mae_c"] < out["persistence.h15.mean_mae_c"])
-    regimes = [r for r in PAPER_TABLE1 if f"online.velocity_mae_cms.regime_{r}" in out]
-    for key, name in (("velocity_mae_cms", "measured"), ("velocity_true_mae_cms", "true")):
+        scores.horizons[15].mean_mae_c["online"] < scores.horizons[15].mean_mae_c["persistence"])
+    regimes = [r for r in PAPER_TABLE1 if r in scores.velocity]
+    for name, against in (("measured", lambda v: v.mae_cms),
+                          ("true", lambda v: v.true_mae_cms or {})):
         c[f"criterion.velocity_below_paper_vs_{name}"] = float(bool(regimes) and all(
-            out.get(f"online.{key}.regime_{r}", np.inf) < PAPER_TABLE1[r][1] for r in regimes))
+            against(scores.velocity[r]).get("online", np.inf) < PAPER_TABLE1[r][1]
+            for r in regimes))
     return c
+
+
+@dataclass(frozen=True)
+class PaperTables:
+    """The run's scores and its flat figures (what ``--json`` writes).
+
+    ``figures``: the protocol's settings, the true parameters (``truth.*``), the scores
+    (:meth:`ReplayScores.flat`), the off-line θ (``offline.theta.<name>``), the timings [s]
+    and :func:`criteria`.
+    """
+
+    scores: ReplayScores
+    figures: dict[str, float]
 
 
 def paper_tables(cfg: PanelConfig, *, seed: int = 0, weather: str = WEATHER,
                  validation_days: float = VALIDATION_DAYS, centre: bool = False,
-                 progress: Callable[[str], None] | None = None) -> dict[str, float]:
-    """Run the protocol of the module docstring; flat figures (units in the key names).
+                 progress: Callable[[str], None] | None = None) -> PaperTables:
+    """Run the protocol of the module docstring.
 
     Parameters
     ----------
@@ -113,10 +131,7 @@ def paper_tables(cfg: PanelConfig, *, seed: int = 0, weather: str = WEATHER,
 
     Returns
     -------
-    dict
-        The scores of :func:`replay_scores` (``online.h1.x1_mae_c``, …), the off-line θ
-        (``offline.theta.<name>``), the true parameters, the timings [s] and
-        :func:`criteria`.
+    PaperTables
     """
     say = progress or (lambda _msg: None)
     cfg = model_config(cfg, 60.0)
@@ -141,9 +156,9 @@ def paper_tables(cfg: PanelConfig, *, seed: int = 0, weather: str = WEATHER,
     t_offline = time.perf_counter() - t0
     say(f"replay of {steps.n_steps} steps (self-calibration as it goes)")
     t0 = time.perf_counter()
-    out = replay_scores(cfg, steps, offline_theta=state.theta, horizons=HORIZONS,
-                        warmup_h=TRAIN_H,
-                        reference_v_ms=np.abs(run.data.get("truth_v_cav_ms")))
+    scores = replay_scores(cfg, steps, offline_theta=state.theta, horizons=HORIZONS,
+                           warmup_h=TRAIN_H,
+                           reference_v_ms=np.abs(run.data.get("truth_v_cav_ms")))
     t_replay = time.perf_counter() - t0
     p = run.plant.params
     figures: dict[str, float] = {
@@ -151,25 +166,26 @@ def paper_tables(cfg: PanelConfig, *, seed: int = 0, weather: str = WEATHER,
         "validation_days": float(validation_days),
         "drift_reflectance_per_day": DRIFT_REFLECTANCE_PER_DAY,
         "drift_h_ca2_per_day": DRIFT_H_PER_DAY,
-        **{f"truth.m_{k}": float(m) for k, m in zip(FIT_NAMES[:6], p.h_multipliers,
+        **{f"truth.m_{k}": float(m) for k, m in zip(CONVECTIVE_NAMES, p.h_multipliers,
                                                      strict=True)},
         "truth.f": float(p.f),
-        **out,
+        **scores.flat(),
         **{f"offline.theta.{k}": float(v) for k, v in zip(FIT_NAMES, state.theta,
                                                             strict=True)},
         "plant_s": t_plant, "offline_fit_s": t_offline, "replay_s": t_replay,
         "wall_s": time.perf_counter() - wall,
     }
-    figures.update(criteria(out))
-    return figures
+    figures.update(criteria(scores))
+    return PaperTables(scores, figures)
 
 
 def _cell(value: float | None) -> str:
     return f"{value:9.2f}" if value is not None else f"{'-':>9}"
 
 
-def report(fig: dict[str, float]) -> str:
+def report(result: PaperTables) -> str:
     """Tables 1 and 2 with the paper's figures beside them, and the criteria (text)."""
+    fig, scores = result.figures, result.scores
     plant = " at the prior centre" if fig.get("prior_centre") else ""
     lines = [f"Paper protocol on the truth plant{plant} (seed {fig['seed']:g}, drift on): "
              f"off-line fit on the first {fig['train_h']:g} h, "
@@ -180,33 +196,29 @@ def report(fig: dict[str, float]) -> str:
                   "vs measured [degC]",
                   f"{'state':<7}{head}{'measured':>9} | paper: off-line self-cal"]
         for s in [*STATES, "mean"]:
-            key = "mean_mae_c" if s == "mean" else f"{s}_mae_c"
-            row = "".join(f"{_cell(fig.get(f'{m}.h{h}.{key}'))}  " for m, _ in MODELS)
-            meas = (np.mean([fig[f"measured.{x}_mean_c"] for x in STATES]) if s == "mean"
-                    else fig[f"measured.{s}_mean_c"])
+            row = "".join(f"{_cell(scores.mae_c(m, h, s))}  " for m, _ in MODELS)
+            meas = (np.mean([scores.measured_mean_c[x] for x in STATES]) if s == "mean"
+                    else scores.measured_mean_c[s])
             paper = PAPER_TABLE2[s]
             lines.append(f"{s:<7}{row}{meas:9.2f} | {paper[0]:13.2f}{paper[1]:9.2f}")
     lines += ["", "self-calibrating minus off-line, paired difference of the absolute errors "
               "± standard error (batch means) [mK]",
               f"{'state':<7}" + "".join(f"{f'h{h}':>20}" for h in HORIZONS)]
     for s in STATES:
-        key = [f"online_vs_offline.h{h}.{s}_mae_diff" for h in HORIZONS]
-        lines.append(f"{s:<7}" + "".join(
-            f"{fig.get(f'{k}_c', np.nan) * 1e3:+11.1f} ± {fig.get(f'{k}_se_c', np.nan) * 1e3:6.1f}"
-            for k in key))
+        pairs = [scores.horizons[h].paired.get("offline", {}).get(s, (np.nan, np.nan))
+                 for h in HORIZONS]
+        lines.append(f"{s:<7}" + "".join(f"{diff * 1e3:+11.1f} ± {se * 1e3:6.1f}"
+                                         for diff, se in pairs))
     lines += ["", "Table 1 — mean absolute difference of the cavity speed |v|, 1 step ahead "
               "[cm/s]: vs anemometer (vs true |v| at the probe)",
               f"{'regime':<7}" + "".join(f"{label:>14}" for _, label in MODELS)
               + f"{'sensor':>9}{'measured':>9} | paper: self-cal measured"]
-    for r in sorted(int(k.rsplit("_", 1)[1]) for k in fig
-                    if k.startswith("measured.velocity_mean_cms.regime_")):
-        cells = "".join(
-            f"{fig[f'{m}.velocity_mae_cms.regime_{r}']:7.2f}"
-            f" ({fig.get(f'{m}.velocity_true_mae_cms.regime_{r}', np.nan):5.2f})"
-            for m, _ in MODELS)
+    for r, v in sorted(scores.velocity.items()):
+        true = v.true_mae_cms or {}
+        cells = "".join(f"{v.mae_cms[m]:7.2f} ({true.get(m, np.nan):5.2f})" for m, _ in MODELS)
+        sensor = np.nan if v.sensor_mae_cms is None else v.sensor_mae_cms
         paper = PAPER_TABLE1.get(r, (np.nan,) * 3)
-        lines.append(f"{r:<7}{cells}{fig.get(f'sensor.velocity_mae_cms.regime_{r}', np.nan):9.2f}"
-                     f"{fig[f'measured.velocity_mean_cms.regime_{r}']:9.2f} | "
+        lines.append(f"{r:<7}{cells}{sensor:9.2f}{v.measured_mean_cms:9.2f} | "
                      f"{paper[1]:13.2f}{paper[2]:9.2f}")
     lines += ["", "criteria (1 = met):"]
     lines += [f"  {k.removeprefix('criterion.'):<44}{fig[k]:g}" for k in fig

@@ -72,14 +72,14 @@ def _bench_control(args: argparse.Namespace) -> dict[str, float]:
 def _bench_paper_tables(args: argparse.Namespace) -> dict[str, float]:
     from dsfd.bench.paper_tables import VALIDATION_DAYS, WEATHER, paper_tables, report
 
-    figures = paper_tables(load_panel(args.config), seed=args.seed,
-                           weather=args.weather or WEATHER,
-                           validation_days=VALIDATION_DAYS if args.days is None else args.days,
-                           centre=args.prior_centre,
-                           progress=lambda msg: print(msg, file=sys.stderr, flush=True))
-    print(report(figures))
+    result = paper_tables(load_panel(args.config), seed=args.seed,
+                          weather=args.weather or WEATHER,
+                          validation_days=VALIDATION_DAYS if args.days is None else args.days,
+                          centre=args.prior_centre,
+                          progress=lambda msg: print(msg, file=sys.stderr, flush=True))
+    print(report(result))
     print()
-    return figures
+    return result.figures
 
 
 #: Benchmark targets: name → function(args) → flat figures.

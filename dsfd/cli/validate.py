@@ -6,11 +6,15 @@ import argparse
 import json
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from dsfd.cli.calibrate import select_rows
 from dsfd.config import ConfigError, load_panel
 from dsfd.measured import iso_utc
 from dsfd.storage.measured_csv import read_measured
+
+if TYPE_CHECKING:
+    from dsfd.estimation.validation import ReplayScores
 
 MODELS = (("online", "self-calibrating"), ("offline", "off-line"),
           ("uncalibrated", "uncalibrated"), ("persistence", "persistence"))
@@ -69,40 +73,38 @@ def _cell(value: float | None, scale: float = 1.0) -> str:
     return f"{value * scale:10.2f}" if value is not None else f"{'-':>10}"
 
 
-def print_tables(out: dict[str, float], models: list[tuple[str, str]],
+def print_tables(scores: ReplayScores, models: list[tuple[str, str]],
                  horizons: tuple[int, ...], step_s: float) -> None:
     """Table 2 (states) per horizon and Table 1 (cavity speed per regime)."""
     head = "".join(f"{label[:10]:>10}" for _, label in models)
-    states = [s for s in ("x1", "x2", "x3", "x4", "x5") if f"measured.{s}_mean_c" in out]
+    states = list(scores.measured_mean_c)  # the states measured, x1..x5 in order
     for h in horizons:
         print(f"\nTable 2 — mean absolute difference, predicted {h} step(s) = "
               f"{h * step_s / 60:g} min ahead vs measured [degC]")
         print(f"{'state':<8}{head}{'measured':>10}")
         for s in [*states, "mean"]:
-            key = "mean_mae_c" if s == "mean" else f"{s}_mae_c"
-            meas = (sum(out[f"measured.{x}_mean_c"] for x in states) / len(states)
-                    if s == "mean" and states else out.get(f"measured.{s}_mean_c"))
-            row = "".join(_cell(out.get(f"{m}.h{h}.{key}")) for m, _ in models)
+            meas = (sum(scores.measured_mean_c[x] for x in states) / len(states)
+                    if s == "mean" and states else scores.measured_mean_c.get(s))
+            row = "".join(_cell(scores.mae_c(m, h, s)) for m, _ in models)
             print(f"{s:<8}{row}{_cell(meas)}")
-    print_paired(out, [m for m, _ in models if m != "online"], horizons, states)
-    regimes = sorted(int(k.rsplit("_", 1)[1]) for k in out
-                     if k.startswith("measured.velocity_mean_cms.regime_"))
+    print_paired(scores, [m for m, _ in models if m != "online"], horizons, states)
+    regimes = sorted(scores.velocity)
     if regimes:
         print("\nTable 1 — mean absolute difference of the cavity speed |v|, one step ahead "
               "[cm/s]")
         print(f"{'regime':<8}{head}{'measured':>10}{'samples':>9}")
         for r in regimes:
-            row = "".join(_cell(out.get(f"{m}.velocity_mae_cms.regime_{r}")) for m, _ in models)
-            print(f"{r:<8}{row}{_cell(out[f'measured.velocity_mean_cms.regime_{r}'])}"
-                  f"{int(out[f'measured.velocity_samples.regime_{r}']):9d}")
+            v = scores.velocity[r]
+            row = "".join(_cell(v.mae_cms.get(m)) for m, _ in models)
+            print(f"{r:<8}{row}{_cell(v.measured_mean_cms)}{v.samples:9d}")
     else:
         print("\nTable 1 — no cavity speed (v_cav_ms) in the data: skipped")
 
 
-def print_paired(out: dict[str, float], others: list[str], horizons: tuple[int, ...],
+def print_paired(scores: ReplayScores, others: list[str], horizons: tuple[int, ...],
                  states: list[str]) -> None:
     """Self-calibrating minus each other model: paired difference ± standard error [mK]."""
-    others = [m for m in others if any(k.startswith(f"online_vs_{m}.") for k in out)]
+    others = [m for m in others if any(hs.paired.get(m) for hs in scores.horizons.values())]
     if not others:
         return
     print("\nSelf-calibrating minus other model, paired difference of the absolute errors "
@@ -113,9 +115,9 @@ def print_paired(out: dict[str, float], others: list[str], horizons: tuple[int, 
         cells = []
         for h in horizons:
             for m in others:
-                key = f"online_vs_{m}.h{h}.{s}_mae_diff"
-                if f"{key}_c" in out:
-                    diff, se = out[f"{key}_c"] * 1e3, out[f"{key}_se_c"] * 1e3
+                pair = scores.horizons[h].paired.get(m, {}).get(s)
+                if pair is not None:
+                    diff, se = pair[0] * 1e3, pair[1] * 1e3
                     cells.append(f"{diff:+10.1f} ± {se:6.1f}")
                 else:
                     cells.append(f"{'-':>19}")
@@ -159,12 +161,12 @@ def run(args: argparse.Namespace) -> int:
                         warmup_h=args.warmup_h, online=not args.no_online,
                         progress=None if args.no_online else _Progress())
     models = [(m, label) for m, label in MODELS
-              if any(k.startswith(f"{m}.") for k in out)]
-    print(f"scored {int(out.get('scored_starts', 0))} start rows; self-calibration updates: "
-          f"{int(out.get('online_updates', 0))}")
+              if m in out.scored_models()]
+    print(f"scored {out.scored_starts} start rows; self-calibration updates: "
+          f"{out.online_updates}")
     print_tables(out, models, horizons, steps.step_s)
     if args.json:
-        doc = {"panel": cfg.panel.id, "data": str(args.data), **out}
+        doc = {"panel": cfg.panel.id, "data": str(args.data), **out.flat()}
         args.json.parent.mkdir(parents=True, exist_ok=True)
         args.json.write_text(json.dumps(doc, indent=1))
         print(f"\nwrote {args.json}")

@@ -5,14 +5,17 @@ from __future__ import annotations
 from pathlib import Path
 
 from dsfd.config.loader import ConfigError, ConfigIssue, build
-from dsfd.config.panel import PARAMETER_NAMES, REGIME_OPENINGS, PanelConfig
+from dsfd.config.panel import REGIME_OPENINGS, PanelConfig
+from dsfd.config.parameters import FIT_NAMES, PARAMETER_NAMES, Param
 
 __all__ = [
+    "FIT_NAMES",
     "PARAMETER_NAMES",
     "REGIME_OPENINGS",
     "ConfigError",
     "ConfigIssue",
     "PanelConfig",
+    "Param",
     "load_panel",
     "panel_from_mapping",
 ]

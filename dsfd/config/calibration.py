@@ -41,11 +41,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 from dsfd.config.loader import Problem, setting
-
-#: Calibrated parameters in the order of the model (copy of panel.PARAMETER_NAMES, kept
-#: here so this module does not import the panel module that imports it).
-_NAMES = ("h_out", "h_ca1", "h_ca2", "h_ca3", "h_ca4", "h_in", "f", "c", "n",
-          "q_x1", "q_x2", "q_x3", "q_x4")
+from dsfd.config.parameters import FIT_NAMES
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -156,8 +152,9 @@ class Calibration:
     def check(self) -> list[Problem]:
         out = []
         for name in self.fixed:
-            if name not in _NAMES:
-                out.append(Problem("fixed", name, f"unknown parameter; known: {', '.join(_NAMES)}"))
+            if name not in FIT_NAMES:
+                out.append(Problem("fixed", name,
+                                   f"unknown parameter; known: {', '.join(FIT_NAMES)}"))
         if len(self.innovation_smoothing_s) != 4:
             out.append(Problem("innovation_smoothing_s", list(self.innovation_smoothing_s),
                                "need one time constant per offset node x1..x4"))

@@ -18,11 +18,8 @@ from dsfd.config.daemon import DaemonSettings
 from dsfd.config.devices import Devices
 from dsfd.config.loader import Problem, setting
 from dsfd.config.mqtt import Mqtt, topic_problem
+from dsfd.config.parameters import PARAMETER_NAMES
 from dsfd.config.safety import Safety
-
-PARAMETER_NAMES: tuple[str, ...] = (
-    "h_out", "h_ca1", "h_ca2", "h_ca3", "h_ca4", "h_in", "f", "c", "n",
-)
 
 #: Damper sets of the ten airflow regimes (docs/model.md#regimes).
 REGIME_OPENINGS: dict[int, frozenset[str]] = {
@@ -331,6 +328,11 @@ class Parameters:
     c: Bounded = setting(doc="Power-law flow coefficient at OR = 1 (regimes 5–8)",
                          unit="m3/(s Pa^n)")
     n: Bounded = setting(doc="Power-law exponent (regimes 5–8)")
+
+    def values(self, what: Literal["default", "lower", "upper"],
+               names: tuple[str, ...] = PARAMETER_NAMES) -> tuple[float, ...]:
+        """Defaults or bounds of the parameters ``names`` (default θ), in that order."""
+        return tuple(getattr(getattr(self, name), what) for name in names)
 
     def check(self) -> list[Problem]:
         if not (self.n.lower >= 0.5 and self.n.upper <= 1.0):

@@ -22,17 +22,17 @@ import math
 
 import numpy as np
 
-from dsfd.config.panel import PanelConfig
+from dsfd.config.panel import Louver, PanelConfig
 from dsfd.control.optimiser import Decision
 
 INSIDE_CIRCULATION, OUTSIDE_CIRCULATION, NIGHT_FLUSH, CLOSED = 1, 3, 7, 10
 
 
-def quantise_louver(phi_deg: float, cfg: PanelConfig) -> float:
+def quantise_louver(phi_deg: float, louver: Louver | None) -> float:
     """Nearest louver position the motor can reach [deg] (0 without a louver)."""
-    if cfg.louver is None or not math.isfinite(phi_deg):
+    if louver is None or not math.isfinite(phi_deg):
         return 0.0
-    angles = np.asarray(cfg.louver.angles_deg())
+    angles = np.asarray(louver.angles_deg())
     return float(angles[np.argmin(np.abs(angles - np.clip(phi_deg, -90.0, 90.0)))])
 
 
@@ -68,7 +68,7 @@ def rule_decision(cfg: PanelConfig, *, heating: bool, t5_c: float | None, t_in_c
     else:
         phi = profile_deg - 90.0 if profile_deg >= 0 else profile_deg + 90.0
         trace.append(f"louver: cooling in sun -> across the rays ({phi:+.1f} deg)")
-    phi_q = quantise_louver(phi, cfg)
+    phi_q = quantise_louver(phi, cfg.louver)
 
     was_open = previous_afr is not None and previous_afr != CLOSED
     band = b.hysteresis_k if was_open else 0.0

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from dsfd.physics.forcing import WeatherInputs
+from dsfd.physics.boundary import WeatherInputs
 from dsfd.physics.solar import extraterrestrial_irradiance, solar_position
 
 #: Below this cos Z the clearness index is not persisted (sun too low to measure it).
@@ -66,19 +66,8 @@ def persistence_forecast(last: WeatherInputs, *, latitude_deg: float, longitude_
         dhi = np.full(n_steps, np.nan)
         dni = np.full(n_steps, np.nan)
 
-    def hold(v: np.ndarray) -> np.ndarray:
-        return np.full(n_steps, latest(v))
-
-    return WeatherInputs(
-        time_s=t_mid,
-        t_out_k=hold(last.t_out_k),
-        ghi_wm2=ghi,
-        dni_wm2=dni,
-        dhi_wm2=dhi,
-        wind_speed_ms=hold(last.wind_speed_ms),
-        wind_dir_deg=hold(last.wind_dir_deg),
-        pressure_pa=hold(last.pressure_pa),
-        t_in_k=hold(last.t_in_k),
-        t_mrt_k=hold(last.t_mrt_k),
-        t_dew_k=hold(last.t_dew_k),
-    )
+    # Everything but the sun-following irradiance is held; façade-plane readings are not
+    # forecast (the horizon is decomposed from GHI).
+    held = WeatherInputs(*(None if v is None else np.full(n_steps, latest(v)) for v in last))
+    return held._replace(time_s=t_mid, ghi_wm2=ghi, dni_wm2=dni, dhi_wm2=dhi,
+                         poa_global_wm2=None, poa_diffuse_wm2=None)

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
@@ -94,6 +95,63 @@ def distinct_regimes(available: tuple[int, ...]) -> tuple[int, ...]:
     return tuple(sorted(seen.values()))
 
 
+class Candidates(NamedTuple):
+    """Constant controls over the horizon, one candidate per element (arrays of one length).
+
+    Attributes
+    ----------
+    angle_idx : ndarray of int
+        Louver position, an index into the optimiser's angles.
+    regime : ndarray of int
+        Airflow regime (the representative of its damper set).
+    or_ : ndarray of float, [-]
+        Damper opening ratio 0..1.
+    """
+
+    angle_idx: np.ndarray
+    regime: np.ndarray
+    or_: np.ndarray
+
+    @classmethod
+    def empty(cls) -> Candidates:
+        return cls(np.zeros(0, int), np.zeros(0, int), np.zeros(0))
+
+    @property
+    def size(self) -> int:
+        return int(np.asarray(self.angle_idx).size)
+
+    def take(self, idx: np.ndarray) -> Candidates:
+        return Candidates(*(np.asarray(v)[idx] for v in self))
+
+    def join(self, *more: Candidates) -> Candidates:
+        """These candidates followed by ``more``."""
+        return Candidates(*(np.concatenate(v) for v in zip(self, *more, strict=True)))
+
+    def distinct(self) -> Candidates:
+        """Without repeats, in first-seen order."""
+        _, first = np.unique(np.stack(list(self)), axis=1, return_index=True)
+        return self.take(np.sort(first))
+
+
+@dataclass(frozen=True, eq=False)
+class Evaluated:
+    """Candidates rolled out over the horizon: their cost terms and first-step regime labels."""
+
+    candidates: Candidates
+    terms: CostTerms
+    labels: np.ndarray
+
+    def best(self) -> _Best:
+        """The cheapest (the first of equal costs)."""
+        return _Best.of(self.terms, self.labels, *self.candidates)
+
+    def join(self, other: Evaluated) -> Evaluated:
+        return Evaluated(self.candidates.join(other.candidates),
+                         CostTerms(*(np.concatenate(v) for v in zip(self.terms, other.terms,
+                                                                   strict=True))),
+                         np.concatenate([self.labels, other.labels]))
+
+
 class HorizonEvaluator:
     """Batched horizon cost of constant controls for one decision."""
 
@@ -134,6 +192,11 @@ class HorizonEvaluator:
         terms = horizon_cost(traj, dt=self.model.dt, heating=self.problem.heating)
         terms = terms._replace(cost_j=terms.cost_j + self._penalty[angle_idx])
         return terms, traj.label[:, 0]
+
+    def evaluate_all(self, candidates: Candidates) -> Evaluated:
+        """:meth:`evaluate` of a candidate record, kept together with it."""
+        terms, labels = self.evaluate(*candidates)
+        return Evaluated(candidates, terms, labels)
 
 
 def _block_means(v: np.ndarray, factor: int, axis: int) -> np.ndarray:
@@ -185,102 +248,118 @@ class MpcOptimiser:
         self.screen_model = LumpedModel(dataclasses.replace(cfg, model=coarse))
         self.angles = np.asarray(cfg.louver.angles_deg() if cfg.louver is not None else (0.0,))
         self.regimes = distinct_regimes(cfg.openings.available_regimes())
+        self.open_regimes = np.array([r for r in self.regimes if r != CLOSED], int)
+        self.or_grid = np.asarray(ctl.or_grid_pct, float) / 100.0
 
     def decide(self, problem: ControlProblem) -> Decision:
         ctl: Control = self.cfg.control
-        angles, regimes = self.angles, self.regimes
-        open_regimes = np.array([r for r in regimes if r != CLOSED], int)
-        grid = np.asarray(ctl.or_grid_pct, float) / 100.0
-        n_a, n_r, n_g = len(angles), len(open_regimes), len(grid)
-        trace = [f"candidates: {n_a} louver positions x {len(regimes)} damper sets "
-                 f"(regimes {list(regimes)}), OR grid {list(ctl.or_grid_pct)} %"]
-        # Stage 1: screening of every louver position x open set x coarse OR, and closed.
-        a_idx, r_idx, g_idx = (m.ravel() for m in np.meshgrid(
-            np.arange(n_a), np.arange(n_r), np.arange(n_g), indexing="ij"))
-        cand = [(a_idx, open_regimes[r_idx], grid[g_idx])]
-        if CLOSED in regimes:
-            cand.append((np.arange(n_a), np.full(n_a, CLOSED), np.zeros(n_a)))
-        all_a, all_r, all_o = (np.concatenate(c) for c in zip(*cand, strict=True))
+        trace = [f"candidates: {len(self.angles)} louver positions x {len(self.regimes)} damper "
+                 f"sets (regimes {list(self.regimes)}), OR grid {list(ctl.or_grid_pct)} %"]
         screen_problem = dataclasses.replace(problem,
                                              forcing=coarsen(problem.forcing, self.factor))
-        full = HorizonEvaluator(self.cfg, self.model, self.optics, problem, angles,
+        full = HorizonEvaluator(self.cfg, self.model, self.optics, problem, self.angles,
                                 coupling_tol_k=ctl.coupling_tolerance_k)
         screen = HorizonEvaluator(self.cfg, self.screen_model, self.optics, screen_problem,
-                                  angles, loads=coarsen_loads(full.loads, self.factor))
-        s_terms, _ = screen.evaluate(all_a, all_r, all_o)
-        trace.append(f"stage 1: screened {all_a.size} candidates at "
+                                  self.angles, loads=coarsen_loads(full.loads, self.factor))
+        screened = self._screen(screen)
+        trace.append(f"stage 1: screened {screened.candidates.size} candidates at "
                      f"{self.screen_model.dt:g} s steps")
-        # Stage 2, one full-resolution batch: the best screened candidates, and an OR
-        # bracket around the screened optimum of the best open louver/regime pairs.
-        finalists = _finalists(s_terms.cost_j, all_r, ctl.full_candidates,
-                               ctl.finalist_margin_pct)
+        finalists, n_best = self._finalists(screened)
+        evaluated = full.evaluate_all(finalists)
+        best = evaluated.best()
+        n_pairs = min(ctl.refine_max_pairs, len(self.angles) * len(self.open_regimes))
+        trace.append(f"stage 2: {finalists.size} at full resolution ({n_best} finalists, "
+                     f"OR brackets of {n_pairs} pairs), best {best.describe(self.angles)}")
+        best, batches = self._refine(full, evaluated, best)
+        trace.append(f"stage 3: {batches} batch(es) of louver neighbours and OR points, best "
+                     f"{best.describe(self.angles)}" if batches else
+                     "stage 3: not needed (the best's louver neighbours were evaluated)")
+        return best.decision(self.angles, method="mpc",
+                             rollouts=full.rollouts + screen.rollouts, trace=tuple(trace))
+
+    def _screen(self, screen: HorizonEvaluator) -> Evaluated:
+        """Stage 1: every louver position × open damper set × coarse OR, and closed, at the
+        screening's coarse time step; the grid first, in (louver, set, OR) order."""
+        n_a = len(self.angles)
+        open_regimes, grid = self.open_regimes, self.or_grid
+        a_idx, r_idx, g_idx = (m.ravel() for m in np.meshgrid(
+            np.arange(n_a), np.arange(len(open_regimes)), np.arange(len(grid)),
+            indexing="ij"))
+        cand = Candidates(a_idx, open_regimes[r_idx], grid[g_idx])
+        if CLOSED in self.regimes:
+            cand = cand.join(Candidates(np.arange(n_a), np.full(n_a, CLOSED), np.zeros(n_a)))
+        return screen.evaluate_all(cand)
+
+    def _finalists(self, screened: Evaluated) -> tuple[Candidates, int]:
+        """Stage 2's one full-resolution batch: the best screened candidates, and OR brackets
+        (:meth:`_or_brackets`); with the number of screened candidates among them."""
+        ctl = self.cfg.control
+        cost, cand = screened.terms.cost_j, screened.candidates
+        best = _best_screened(cost, cand.regime, ctl.full_candidates, ctl.finalist_margin_pct)
         # The all-open set at every coarse OR at the screened best louver position: its
         # flows can switch pattern twice within the horizon at one-minute steps, which the
         # coarse step cannot represent (Q_air of the other sign, cost 25 % off, seen) — a
         # distortion no margin bounds, while the louver ranking the screening gets right.
-        finalists = np.union1d(finalists, np.flatnonzero(
-            (all_a == all_a[int(np.argmin(s_terms.cost_j))]) & (all_r == ALL_OPEN)))
-        fa, fr, fo = all_a[finalists], all_r[finalists], all_o[finalists]
-        if n_r:
-            coarse = s_terms.cost_j[: n_a * n_r * n_g].reshape(n_a, n_r, n_g)
-            pair_cost = coarse.min(axis=2)
-            g_best = coarse.argmin(axis=2)
-            top = np.argsort(pair_cost, axis=None, kind="stable")[: ctl.refine_max_pairs]
-            pa, pr = np.unravel_index(top, pair_cost.shape)
-            centre = grid[g_best[pa, pr]]
-            spacing = float(np.max(np.diff(grid)))
-            k = ctl.or_refine_points
-            frac = np.linspace(-1.0, 1.0, k + 2)[1:-1]
-            pts = np.clip(centre[:, None] + spacing * frac[None, :], 0.0, 1.0)
-            # The louver neighbours of the best pair at its screened OR: the winner is
-            # usually that pair at that OR, and stage 3 then finds its neighbours evaluated.
-            na_ = _around(int(pa[0]), n_a, ctl.louver_neighbours)
-            fa = np.concatenate([fa, np.repeat(pa, k), na_])
-            fr = np.concatenate([fr, np.repeat(open_regimes[pr], k),
-                                 np.full(na_.size, open_regimes[pr[0]])])
-            fo = np.concatenate([fo, pts.ravel(), np.full(na_.size, centre[0])])
-            fa, fr, fo = _distinct(fa, fr, fo)
-        terms, labels = full.evaluate(fa, fr, fo)
-        best = _Best.of(terms, labels, fa, fr, fo)
-        trace.append(f"stage 2: {fa.size} at full resolution ({len(finalists)} finalists, "
-                     f"OR brackets of {min(ctl.refine_max_pairs, n_a * n_r)} pairs), best "
-                     f"{best.describe(angles)}")
-        # Stage 3: the louver positions next to the best (the screening can misrank
-        # neighbouring angles by a tenth of a per cent) and parabolic refinement of the
-        # best pair's OR, one batch per round.
-        na, nr, new = _louver_neighbours(best, n_a, ctl.louver_neighbours, fa, fr, fo)
+        best = np.union1d(best, np.flatnonzero(
+            (cand.angle_idx == cand.angle_idx[int(np.argmin(cost))])
+            & (cand.regime == ALL_OPEN)))
+        finalists = cand.take(best)
+        if len(self.open_regimes):
+            finalists = finalists.join(self._or_brackets(cost)).distinct()
+        return finalists, len(best)
+
+    def _or_brackets(self, screened_cost: np.ndarray) -> Candidates:
+        """An OR bracket around the screened optimum of the ``refine_max_pairs`` best open
+        louver/regime pairs, and the louver neighbours of the best pair at its screened OR:
+        the winner is usually that pair at that OR, and stage 3 then finds its neighbours
+        evaluated."""
+        ctl = self.cfg.control
+        open_regimes, grid = self.open_regimes, self.or_grid
+        n_a, n_r, n_g = len(self.angles), len(open_regimes), len(grid)
+        coarse = screened_cost[: n_a * n_r * n_g].reshape(n_a, n_r, n_g)
+        pair_cost = coarse.min(axis=2)
+        g_best = coarse.argmin(axis=2)
+        top = np.argsort(pair_cost, axis=None, kind="stable")[: ctl.refine_max_pairs]
+        pair_angle, pair_regime = np.unravel_index(top, pair_cost.shape)
+        centre = grid[g_best[pair_angle, pair_regime]]
+        spacing = float(np.max(np.diff(grid)))
+        k = ctl.or_refine_points
+        frac = np.linspace(-1.0, 1.0, k + 2)[1:-1]
+        points = np.clip(centre[:, None] + spacing * frac[None, :], 0.0, 1.0)
+        brackets = Candidates(np.repeat(pair_angle, k), np.repeat(open_regimes[pair_regime], k),
+                              points.ravel())
+        around = _around(int(pair_angle[0]), n_a, ctl.louver_neighbours)
+        neighbours = Candidates(around, np.full(around.size, open_regimes[pair_regime[0]]),
+                                np.full(around.size, centre[0]))
+        return brackets.join(neighbours)
+
+    def _refine(self, full: HorizonEvaluator, evaluated: Evaluated,
+                best: _Best) -> tuple[_Best, int]:
+        """Stage 3: the louver positions next to the best (the screening can misrank
+        neighbouring angles by a tenth of a per cent) and parabolic refinement of the best
+        pair's OR, one batch per round. Returns the best and the number of batches."""
+        ctl = self.cfg.control
+        new = _louver_neighbours(best, len(self.angles), ctl.louver_neighbours,
+                                 evaluated.candidates)
         batches = 0
         for round_ in range(max(1, ctl.or_refine_rounds)):
-            same = (fa == best.angle_idx) & (fr == best.regime)
-            spread = float(np.ptp(terms.cost_j[same])) if same.sum() > 1 else 0.0
+            cand, cost = evaluated.candidates, evaluated.terms.cost_j
+            same = (cand.angle_idx == best.angle_idx) & (cand.regime == best.regime)
+            spread = float(np.ptp(cost[same])) if same.sum() > 1 else 0.0
             if (round_ < ctl.or_refine_rounds and best.regime != CLOSED
                     and spread > ctl.flat_tolerance_pct / 100.0 * max(abs(best.cost), 1.0)):
                 # (a flat cost hardly depends on OR here: nothing to gain)
-                pts = _parabolic_points(fo[same], terms.cost_j[same])
-                na = np.concatenate([na, np.full(pts.size, best.angle_idx)])
-                nr = np.concatenate([nr, np.full(pts.size, best.regime)])
-                new = np.concatenate([new, pts])
+                points = _parabolic_points(cand.or_[same], cost[same])
+                new = new.join(Candidates(np.full(points.size, best.angle_idx),
+                                          np.full(points.size, best.regime), points))
             if new.size == 0:
                 break
-            t3, l3 = full.evaluate(na, nr, new)
+            batch = full.evaluate_all(new)
             batches += 1
-            best = best.better(_Best.of(t3, l3, na, nr, new))
-            fa, fr, fo = (np.concatenate(v) for v in ((fa, na), (fr, nr), (fo, new)))
-            terms = CostTerms(*(np.concatenate(v) for v in zip(terms, t3, strict=True)))
-            na, nr, new = np.zeros(0, int), np.zeros(0, int), np.zeros(0)  # neighbours: once
-        trace.append(f"stage 3: {batches} batch(es) of louver neighbours and OR points, best "
-                     f"{best.describe(angles)}" if batches else
-                     "stage 3: not needed (the best's louver neighbours were evaluated)")
-        return best.decision(angles, method="mpc",
-                             rollouts=full.rollouts + screen.rollouts, trace=tuple(trace))
-
-
-def _distinct(a: np.ndarray, r: np.ndarray, o: np.ndarray
-              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Candidates (louver index, regime, OR) without repeats, in first-seen order."""
-    _, first = np.unique(np.stack([a, r, o]), axis=1, return_index=True)
-    keep = np.sort(first)
-    return a[keep], r[keep], o[keep]
+            best = best.better(batch.best())
+            evaluated = evaluated.join(batch)
+            new = Candidates.empty()  # neighbours: once
+        return best, batches
 
 
 def _around(idx: int, n_angles: int, reach: int) -> np.ndarray:
@@ -289,19 +368,18 @@ def _around(idx: int, n_angles: int, reach: int) -> np.ndarray:
     return out[(out >= 0) & (out < n_angles) & (out != idx)]
 
 
-def _louver_neighbours(best: _Best, n_angles: int, reach: int, fa: np.ndarray,
-                       fr: np.ndarray, fo: np.ndarray
-                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _louver_neighbours(best: _Best, n_angles: int, reach: int,
+                       evaluated: Candidates) -> Candidates:
     """Louver positions within ``reach`` steps of the best, at its regime and OR, that have
-    not been evaluated at full resolution yet (angle indices, regimes, openings)."""
+    not been evaluated at full resolution yet."""
     idx = _around(best.angle_idx, n_angles, reach)
-    seen = (fr == best.regime) & np.isclose(fo, best.or_)
-    idx = idx[~np.isin(idx, fa[seen])]
-    return idx, np.full(idx.size, best.regime), np.full(idx.size, best.or_)
+    seen = (evaluated.regime == best.regime) & np.isclose(evaluated.or_, best.or_)
+    idx = idx[~np.isin(idx, evaluated.angle_idx[seen])]
+    return Candidates(idx, np.full(idx.size, best.regime), np.full(idx.size, best.or_))
 
 
-def _finalists(cost: np.ndarray, regime: np.ndarray, n_best: int,
-               margin_pct: float) -> np.ndarray:
+def _best_screened(cost: np.ndarray, regime: np.ndarray, n_best: int,
+                   margin_pct: float) -> np.ndarray:
     """Screened candidates for the full-resolution stage: the ``n_best`` best overall and
     the best of every damper set whose screened cost is within ``margin_pct`` of the best.
 

@@ -69,7 +69,7 @@ def optimise_paper_sqp(cfg: PanelConfig, model: LumpedModel, optics: FacadeOptic
     phi_c, afr_star, or_c = unscale(res.x)
     afr = _nearest_available(afr_star, available)
     relaxed_j = float(res.fun) * J_PER_WH
-    phi_q = quantise_louver(phi_c, cfg)
+    phi_q = quantise_louver(phi_c, cfg.louver)
     j_q, label = cost(phi_q, afr, or_c)
     closed = afr == 10
     trace = (f"SLSQP: {res.nit} iterations, status {res.status} ({res.message})",

@@ -181,20 +181,32 @@ def convert_aalborg(src_dir: str | Path, *, year: int = 2006,
         total, diffuse = (_interpolate_hourly(t, bnd["hour"], v) for v in (total, diffuse))
     total = np.clip(total, 0.0, None)
     diffuse = np.minimum(np.clip(diffuse, 0.0, None), total)
+    irradiance_cols = _irradiance_columns(origin + t + 0.5 * INTERVAL_S, total, diffuse,
+                                          irradiance)
+    cols.update({name: weather(v) for name, v in irradiance_cols.items()})
+    notes = _conversion_notes(year=year, irradiance=irradiance, hourly=hourly)
+    return MeasuredData(time_s, cols, str(src), notes)
+
+
+def _irradiance_columns(mid_s: np.ndarray, total: np.ndarray, diffuse: np.ndarray,
+                        irradiance: str) -> dict[str, np.ndarray]:
+    """Ghtot/Ghdiff (clipped, diffuse ≤ total) as façade-plane columns, or as horizontal
+    GHI, DHI and the DNI of their difference with the sun at the interval midpoints
+    ``mid_s`` (all diffuse with the sun below MIN_COS_ZENITH)."""
     if irradiance == "facade":
-        cols["poa_wm2"] = weather(total)
-        cols["poa_diffuse_wm2"] = weather(diffuse)
-    elif irradiance == "horizontal":
-        sun = solar_position(origin + t + 0.5 * INTERVAL_S, LATITUDE_DEG, LONGITUDE_DEG)
+        return {"poa_wm2": total, "poa_diffuse_wm2": diffuse}
+    if irradiance == "horizontal":
+        sun = solar_position(mid_s, LATITUDE_DEG, LONGITUDE_DEG)
         cos_z = np.cos(np.radians(sun.zenith_deg))
         up = cos_z > MIN_COS_ZENITH
         dni = np.where(up, (total - diffuse) / np.where(up, cos_z, 1.0), 0.0)
-        cols["ghi_wm2"] = weather(total)
-        cols["dhi_wm2"] = weather(np.where(up, diffuse, total))
-        cols["dni_wm2"] = weather(dni)
-    else:
-        raise ValueError(f"irradiance must be 'facade' or 'horizontal', not {irradiance!r}")
-    notes = (
+        return {"ghi_wm2": total, "dhi_wm2": np.where(up, diffuse, total), "dni_wm2": dni}
+    raise ValueError(f"irradiance must be 'facade' or 'horizontal', not {irradiance!r}")
+
+
+def _conversion_notes(*, year: int, irradiance: str, hourly: str) -> tuple[str, ...]:
+    """Provenance of a converted record, for the measured-data notes."""
+    return (
         ATTRIBUTION,
         f"converted by dsfd convert-aalborg from {BOUNDARY_FILE} and {VALIDATION_FILE}",
         f"year {year} assumed (not in the source); source clock CET = UTC+1",
@@ -207,4 +219,3 @@ def convert_aalborg(src_dir: str | Path, *, year: int = 2006,
         "x1 = Tei_exp, x2 = Tie_exp, x3 = Tii_exp, t_room = Tint; regime 3 (exterior "
         "openings) throughout",
     )
-    return MeasuredData(time_s, cols, str(src), notes)

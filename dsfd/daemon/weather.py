@@ -20,23 +20,21 @@ pressure. Per cycle at time t_k:
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from dsfd.config.panel import PanelConfig
+from dsfd.config.panel import PanelConfig, Room
 from dsfd.control.forecast import persistence_forecast
 from dsfd.drivers.base import Sample
-from dsfd.physics.constants import T_ZERO
-from dsfd.physics.forcing import Forcing, WeatherInputs, facade_forcing
+from dsfd.physics.boundary import WeatherInputs, model_weather
+from dsfd.physics.forcing import Forcing, facade_forcing
 
 __all__ = ["REQUIRED_WEATHER", "CycleWeather", "forecast_forcing", "measured_weather",
            "room_temperature"]
 
 #: Signals without which no decision is possible.
 REQUIRED_WEATHER: tuple[str, ...] = ("t_out_c", "ghi_wm2")
-STANDARD_PRESSURE_PA = 101325.0
 
 
 @dataclass(frozen=True)
@@ -67,18 +65,19 @@ class CycleWeather:
     room_source: str
 
 
-def room_temperature(cfg: PanelConfig, sample: Sample) -> tuple[float, str]:
-    """Room air temperature [degC] and where it came from (``sensor`` or ``config``)."""
-    source = cfg.daemon.room_temperature_source
+def room_temperature(sample: Sample, *, source: str, room: Room) -> tuple[float, str]:
+    """Room air temperature [degC] and where it came from (``sensor`` or ``config``), by
+    ``daemon.room_temperature_source`` (``source``) and the panel's ``room`` section."""
     measured = sample.good("t_room_c")
     if source != "config" and measured is not None:
         return measured, "sensor"
-    return cfg.room.t_in_c, "config"
+    return room.t_in_c, "config"
 
 
 def measured_weather(cfg: PanelConfig, sample: Sample) -> CycleWeather:
     """Weather of the interval ending at ``sample.time_s`` (see module docstring)."""
-    t_room_c, room_source = room_temperature(cfg, sample)
+    t_room_c, room_source = room_temperature(
+        sample, source=cfg.daemon.room_temperature_source, room=cfg.room)
     missing = tuple(n for n in REQUIRED_WEATHER if sample.good(n) is None)
     if missing:
         return CycleWeather(None, None, missing, (), t_room_c, room_source)
@@ -87,32 +86,18 @@ def measured_weather(cfg: PanelConfig, sample: Sample) -> CycleWeather:
         notes.append(f"room sensor t_room_c not GOOD: room at {t_room_c:g} degC (config)")
     wind = sample.good("wind_speed_ms")
     if wind is None:
-        wind = 0.0
         notes.append("wind speed unknown: calm assumed in the model")
     wind_dir = sample.good("wind_dir_deg")
     if wind_dir is None:
-        wind_dir = cfg.facade.azimuth_deg
         notes.append("wind direction unknown: normal to the facade assumed")
     pressure_hpa = sample.good("pressure_hpa")
-    pressure = STANDARD_PRESSURE_PA if pressure_hpa is None else pressure_hpa * 100.0
-    t_out_k = float(sample.good("t_out_c")) + T_ZERO  # type: ignore[arg-type]
-    t_in_k = t_room_c + T_ZERO
-    t_mrt_k = t_in_k if cfg.room.t_mrt_c is None else cfg.room.t_mrt_c + T_ZERO
-    w = WeatherInputs(
+    # Dew point: not read (only the Clark-Allen sky model uses it; model_weather's default).
+    w = model_weather(
         time_s=np.array([sample.time_s - 0.5 * cfg.model.step_s]),
-        t_out_k=np.array([t_out_k]),
-        ghi_wm2=np.array([max(float(sample.good("ghi_wm2")), 0.0)]),  # type: ignore[arg-type]
-        dni_wm2=np.array([math.nan]),
-        dhi_wm2=np.array([math.nan]),
-        wind_speed_ms=np.array([max(wind, 0.0)]),
-        wind_dir_deg=np.array([wind_dir]),
-        pressure_pa=np.array([pressure]),
-        t_in_k=np.array([t_in_k]),
-        t_mrt_k=np.array([t_mrt_k]),
-        # Dew point: only the Clark-Allen sky model uses it, and it falls back to
-        # t_out - 5 K without one (facade_forcing).
-        t_dew_k=np.array([math.nan]),
-    )
+        t_out_c=sample.good("t_out_c"), ghi_wm2=sample.good("ghi_wm2"),
+        wind_speed_ms=wind, wind_dir_deg=wind_dir,
+        pressure_pa=None if pressure_hpa is None else pressure_hpa * 100.0,
+        t_in_c=t_room_c, room=cfg.room, facade_azimuth_deg=cfg.facade.azimuth_deg)
     return CycleWeather(w, facade_forcing(cfg, w), (), tuple(notes), t_room_c, room_source)
 
 

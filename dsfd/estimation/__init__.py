@@ -15,8 +15,10 @@ Pure core (no files, sockets, clocks or logging configuration):
 
 Files: :mod:`dsfd.storage.calibration_file`. Settings: ``calibration:`` of the panel
 (:class:`dsfd.config.calibration.Calibration`). A consumer of the calibrated model uses
-``theta[:9]`` as the model parameters and adds the offsets ``theta[9:]`` to the absorbed
-short-wave of its inputs (:func:`~dsfd.estimation.params.with_offsets`).
+θ (:attr:`OnlineCalibrator.model_theta`) as the model parameters and adds the offsets q
+(:attr:`OnlineCalibrator.heat_offsets_wm2`) to the absorbed short-wave of its inputs
+(:func:`~dsfd.estimation.params.with_offsets`); components by name:
+:class:`dsfd.config.parameters.Param`.
 """
 
 from dsfd.estimation.calibration import OnlineCalibrator, UpdateReport, offline_fit, window_start
@@ -30,7 +32,7 @@ from dsfd.estimation.params import (
 )
 from dsfd.estimation.state import CalibrationState, CalibrationStateError, state_from_dict
 from dsfd.estimation.stepdata import StepData, model_config, step_data
-from dsfd.estimation.validation import replay_scores
+from dsfd.estimation.validation import ReplayScores, replay_scores
 
 __all__ = [
     "FIT_NAMES",
@@ -40,6 +42,7 @@ __all__ = [
     "ObserverTrack",
     "OnlineCalibrator",
     "ParameterSpace",
+    "ReplayScores",
     "StepData",
     "UpdateReport",
     "fill_state",

@@ -26,7 +26,7 @@ from dsfd.config.calibration import Calibration
 from dsfd.estimation.fit import FitResult, fit_staged, fit_window
 from dsfd.estimation.objective import WindowProblem, window_problem
 from dsfd.estimation.observer import observe, observer_step
-from dsfd.estimation.params import FIT_NAMES, I_Q, N_PARAMS, ParameterSpace
+from dsfd.estimation.params import FIT_NAMES, I_Q, N_PARAMS, ParameterSpace, full_vector
 from dsfd.estimation.state import CalibrationState
 from dsfd.estimation.stepdata import StepData
 from dsfd.physics.model import LumpedModel
@@ -107,8 +107,20 @@ class OnlineCalibrator:
 
     @property
     def theta(self) -> np.ndarray:
-        """Current estimate θ̂ (copy)."""
+        """Current estimate of the fit vector ϑ̂ = (θ̂, q̂) (copy)."""
         return self.state.theta.copy()
+
+    @property
+    def model_theta(self) -> np.ndarray:
+        """The model parameters θ̂ (9,) of the current estimate (what the model, the observer
+        and the optimiser take as ``theta``)."""
+        return full_vector(self.state.theta)[:N_PARAMS].copy()
+
+    @property
+    def heat_offsets_wm2(self) -> np.ndarray:
+        """The heat-flux offsets q̂ (4,) [W/m2] of the current estimate (the optimiser's
+        ``ControlProblem.heat_offsets_wm2``)."""
+        return full_vector(self.state.theta)[N_PARAMS:].copy()
 
     def due(self, now_s: float, data_start_s: float) -> bool:
         """True when an update is due at ``now_s`` [s] with data since ``data_start_s``."""
@@ -141,10 +153,10 @@ class OnlineCalibrator:
         if problem.n_residuals < 3 * max(int(free.sum()), 1):
             return UpdateReport(st, None, f"only {problem.n_residuals} residuals in the window")
         hours = 0.0 if st.last_update_s is None else (now - st.last_update_s) / 3600.0
-        prior_cov = self.space.grown_prior(st.cov_phi, hours)
+        prior_cov = self.space.grown_prior(st.cov_z, hours)
         try:
             fit = _fit(cfg, ONLINE_ROUNDS)(
-                problem, self.space, prior_phi=self.space.to_phi(st.theta),
+                problem, self.space, prior_z=self.space.to_z(st.theta),
                 prior_cov=prior_cov, free=free, loss=cfg.loss, f_scale=cfg.f_scale,
                 prior_weight=cfg.prior_weight, max_nfev=max_nfev or cfg.max_nfev,
                 broyden=cfg.broyden_updates, adaptive_scales=cfg.adaptive_scales)
@@ -156,7 +168,7 @@ class OnlineCalibrator:
             return UpdateReport(self.state, fit, f"fit failed: {fit.message}")
         self.state = dataclasses.replace(
             st, theta=np.where(fit.free, self.space.clip(fit.theta), st.theta),
-            cov_phi=fit.cov_phi, last_update_s=now,
+            cov_z=fit.cov_z, last_update_s=now,
             updates=st.updates + 1, residuals_last=fit.n_residuals, cost_last=fit.cost,
             free_last=tuple(k for k, f in zip(FIT_NAMES, fit.free, strict=True) if f))
         return UpdateReport(self.state, fit)
@@ -257,14 +269,14 @@ def offline_fit(model: LumpedModel, steps: StepData, settings: Calibration | Non
                                forgetting_per_h=1.0)
         free = space.free_in_window(problem.regimes, problem.measured)
         fit = _fit(settings, OFFLINE_ROUNDS)(
-            problem, space, prior_phi=mean, prior_cov=cov, free=free, loss=settings.loss,
+            problem, space, prior_z=mean, prior_cov=cov, free=free, loss=settings.loss,
             f_scale=settings.f_scale, prior_weight=settings.prior_weight,
             max_nfev=max_nfev or settings.offline_max_nfev,
             adaptive_scales=settings.adaptive_scales, progress=progress)
         theta = np.where(fit.free, space.clip(fit.theta), space.default)
     assert fit is not None
     state = dataclasses.replace(
-        state, theta=theta, cov_phi=fit.cov_phi, last_update_s=float(steps.time_s[-1]),
+        state, theta=theta, cov_z=fit.cov_z, last_update_s=float(steps.time_s[-1]),
         updates=1, residuals_last=fit.n_residuals, cost_last=fit.cost,
         free_last=tuple(k for k, f in zip(FIT_NAMES, fit.free, strict=True) if f))
     return state, fit

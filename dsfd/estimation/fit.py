@@ -1,12 +1,12 @@
 """One bounded, robust, prior-regularised least-squares fit of θ on a window (Eq. 3).
 
-Minimises, over the free parameters φ_F (log θ; n linear) within the bounds,
+Minimises, over the free parameters z_F (log θ; n linear) within the bounds,
 
-    ½ Σ_j c² ρ(e_j(θ)²/c²)  +  ½ w (φ_F − φ̄_F)ᵀ P̄_F⁻¹ (φ_F − φ̄_F)
+    ½ Σ_j c² ρ(e_j(θ)²/c²)  +  ½ w (z_F − z̄_F)ᵀ P̄_F⁻¹ (z_F − z̄_F)
 
 with e the weighted multi-step residuals of :mod:`dsfd.estimation.objective`, ρ a robust
 loss with soft threshold c (``f_scale``), and the arrival cost of moving-horizon
-estimation (Rao, Rawlings & Mayne 2003): the previous estimate φ̄ with covariance P̄
+estimation (Rao, Rawlings & Mayne 2003): the previous estimate z̄ with covariance P̄
 summarises the data before the window, so parameters the window does not excite stay put.
 
 Notes
@@ -14,9 +14,9 @@ Notes
 * Robust loss: the data residuals are replaced by r̃ = c·sgn(e)·√ρ(e²/c²), so that
   Σ r̃² is the robust cost, with Jacobian scaled by dr̃/de = ρ'·|e|/(c√ρ) (the "square-root
   robustification" of Triggs et al. 2000, §4.3); the prior rows stay quadratic. ρ as in
-  ``scipy.optimize.least_squares``: soft_l1 2(√(1+z) − 1), huber, cauchy ln(1+z),
-  arctan(z). One wrong sample therefore pulls with a bounded force.
-* Jacobian: forward differences in φ, all perturbed θ as extra batch rows of ONE model
+  ``scipy.optimize.least_squares``: soft_l1 2(√(1+u) − 1), huber, cauchy ln(1+u),
+  arctan(u) of u = e²/c². One wrong sample therefore pulls with a bounded force.
+* Jacobian: forward differences in z, all perturbed θ as extra batch rows of ONE model
   rollout (:meth:`WindowProblem.predict`); backward at an upper bound.
 * Covariance: P = (J̃ᵀJ̃ / (s² m_r) + w P̄⁻¹)⁻¹ with s = 1.4826·median|r̃| (robust
   residual scale) and m_r the mean number of lead times per rollout — the residuals of one
@@ -38,39 +38,39 @@ from scipy.linalg import solve_triangular
 from scipy.optimize import least_squares
 
 from dsfd.estimation.objective import OUTPUTS, WindowProblem
-from dsfd.estimation.params import I_C, I_F, I_N, N_PARAMS, ParameterSpace
+from dsfd.estimation.params import N_PARAMS, Param, ParameterSpace
 
-#: Forward-difference steps in φ: 1 % of θ for log coordinates, 0.01 for n, 1 W/m2 for
+#: Forward-difference steps in z: 1 % of θ for log coordinates, 0.01 for n, 1 W/m2 for
 #: the offsets — output changes of ~0.01 K, a hundred times the coupling tolerance of
 #: the fit's rollouts (dsfd.estimation.objective.COUPLING_TOL_K).
 FD_STEP_LOG, FD_STEP_N, FD_STEP_OFFSET_WM2 = 1e-2, 1e-2, 1.0
 
 
-def robust_rho(z: np.ndarray, loss: str) -> tuple[np.ndarray, np.ndarray]:
-    """ρ(z) and ρ'(z) of the scipy losses (z = (e/c)²)."""
+def robust_rho(u: np.ndarray, loss: str) -> tuple[np.ndarray, np.ndarray]:
+    """ρ(u) and ρ'(u) of the scipy losses (u = (e/c)²)."""
     if loss == "linear":
-        return z, np.ones_like(z)
+        return u, np.ones_like(u)
     if loss == "soft_l1":
-        t = np.sqrt(1.0 + z)
+        t = np.sqrt(1.0 + u)
         return 2.0 * (t - 1.0), 1.0 / t
     if loss == "huber":
-        big = z > 1.0
-        rz = np.sqrt(np.where(big, z, 1.0))
-        return np.where(big, 2.0 * rz - 1.0, z), np.where(big, 1.0 / rz, 1.0)
+        big = u > 1.0
+        rz = np.sqrt(np.where(big, u, 1.0))
+        return np.where(big, 2.0 * rz - 1.0, u), np.where(big, 1.0 / rz, 1.0)
     if loss == "cauchy":
-        return np.log1p(z), 1.0 / (1.0 + z)
+        return np.log1p(u), 1.0 / (1.0 + u)
     if loss == "arctan":
-        return np.arctan(z), 1.0 / (1.0 + z * z)
+        return np.arctan(u), 1.0 / (1.0 + u * u)
     raise ValueError(f"unknown loss {loss!r}")
 
 
 def robustify(e: np.ndarray, loss: str, scale: float) -> tuple[np.ndarray, np.ndarray]:
     """r̃ = c sgn(e) √ρ(e²/c²) and dr̃/de (shape of ``e``)."""
-    z = (e / scale) ** 2
-    rho, drho = robust_rho(z, loss)
+    u = (e / scale) ** 2
+    rho, drho = robust_rho(u, loss)
     root = np.sqrt(np.clip(rho, 0.0, None))
     r = scale * np.sign(e) * root
-    small = z < 1e-12
+    small = u < 1e-12
     slope = np.where(small, 1.0, drho * np.abs(e) / (scale * np.where(small, 1.0, root)))
     return r, slope
 
@@ -83,8 +83,8 @@ class FitResult:
     ----------
     theta : ndarray (9,)
         Estimate (held parameters at the prior mean).
-    cov_phi : ndarray (9, 9)
-        Posterior covariance in φ for the free block, the prior elsewhere.
+    cov_z : ndarray (9, 9)
+        Posterior covariance in z for the free block, the prior elsewhere.
     free : ndarray (9,), bool
     cost : float
         Final robust cost (data + prior).
@@ -98,7 +98,7 @@ class FitResult:
     """
 
     theta: np.ndarray
-    cov_phi: np.ndarray
+    cov_z: np.ndarray
     free: np.ndarray
     cost: float
     cost_start: float
@@ -118,7 +118,7 @@ def _prior_rows(cov_free: np.ndarray, weight: float) -> np.ndarray:
     return np.sqrt(weight) * solve_triangular(chol, np.eye(p), lower=True)
 
 
-def fit_window(problem: WindowProblem, space: ParameterSpace, *, prior_phi: np.ndarray,
+def fit_window(problem: WindowProblem, space: ParameterSpace, *, prior_z: np.ndarray,
                prior_cov: np.ndarray, free: np.ndarray, loss: str, f_scale: float,
                prior_weight: float, max_nfev: int, broyden: int = 0,
                adaptive_scales: bool = False,
@@ -129,10 +129,10 @@ def fit_window(problem: WindowProblem, space: ParameterSpace, *, prior_phi: np.n
     ----------
     problem : WindowProblem
     space : ParameterSpace
-    prior_phi : array (9,)
-        Arrival-cost mean φ̄ (also the start point and the value of held parameters).
+    prior_z : array (9,)
+        Arrival-cost mean z̄ (also the start point and the value of held parameters).
     prior_cov : array (9, 9)
-        Arrival-cost covariance P̄ in φ.
+        Arrival-cost covariance P̄ in z.
     free : array (9,), bool
         Parameters the fit may move.
     loss, f_scale : str, float
@@ -154,96 +154,129 @@ def fit_window(problem: WindowProblem, space: ParameterSpace, *, prior_phi: np.n
     -------
     FitResult
     """
-    free = np.asarray(free, bool)
-    idx = np.flatnonzero(free)
-    prior_phi = np.asarray(prior_phi, float)
-    lo, hi = space.phi_lower[idx], space.phi_upper[idx]
-    span = hi - lo
-    x0 = np.clip(prior_phi[idx], lo + 1e-6 * span, hi - 1e-6 * span)
-    a_prior = _prior_rows(prior_cov[np.ix_(idx, idx)], prior_weight)
-    fd = np.where(space.is_log, FD_STEP_LOG, np.where(np.arange(space.is_log.size) >= N_PARAMS,
-                                                      FD_STEP_OFFSET_WM2, FD_STEP_N))[idx]
-    mean_f = prior_phi[idx]
-
-    def theta_of(x: np.ndarray) -> np.ndarray:
-        phi = prior_phi.copy()
-        phi[idx] = x
-        return space.to_theta(phi)
-
-    if adaptive_scales and problem.n_residuals:
-        problem = problem.rescaled(problem.predict(theta_of(x0)[None])[0])
-
-    cache: dict[str, np.ndarray] = {}
-    calls = [0]
-    m = problem.n_residuals
-
-    def fun(x: np.ndarray) -> np.ndarray:
-        if "x" in cache and np.array_equal(cache["x"], x):
-            return cache["out"]
-        e = problem.residuals(theta_of(x))
-        r, slope = robustify(e, loss, f_scale)
-        out = np.concatenate([r, a_prior @ (x - mean_f)])
-        cache.update(x=x.copy(), e=e, slope=slope, out=out)
-        calls[0] += 1
-        if progress is not None:
-            progress(calls[0], max_nfev, 0.5 * float(out @ out))
-        return out
-
-    jac_state: dict[str, object] = {"since_fd": broyden}
-
-    def jac(x: np.ndarray) -> np.ndarray:
-        out = fun(x)
-        prev = jac_state.get("j")
-        if prev is not None and jac_state["since_fd"] < broyden:
-            # Broyden rank-one update of the data block (robustified residuals)
-            step_x = x - jac_state["x"]
-            ss = float(step_x @ step_x)
-            if ss > 0.0:
-                j_data = prev + np.outer(out[:m] - jac_state["r"] - prev @ step_x, step_x) / ss
-                jac_state.update(j=j_data, x=x.copy(), r=out[:m].copy(),
-                                 since_fd=jac_state["since_fd"] + 1)
-                return np.vstack([j_data, a_prior])
-        e, slope = cache["e"], cache["slope"]
-        step = np.where(x + fd <= hi, fd, -fd)
-        rows = []
-        for j in range(len(idx)):
-            xj = x.copy()
-            xj[j] += step[j]
-            rows.append(theta_of(xj))
-        pert = problem.residuals_of(problem.predict(np.array(rows)))
-        j_data = ((pert - e[None, :]) / step[:, None]).T * slope[:, None]
-        jac_state.update(j=j_data, x=x.copy(), r=out[:m].copy(), since_fd=0)
-        return np.vstack([j_data, a_prior])
-
+    objective = _WindowObjective(problem, space, prior_z=prior_z, prior_cov=prior_cov,
+                                 free=free, loss=loss, f_scale=f_scale,
+                                 prior_weight=prior_weight, broyden=broyden,
+                                 progress=progress, max_nfev=max_nfev)
+    if adaptive_scales:
+        objective.rescale()
+    problem, idx, x0 = objective.problem, objective.idx, objective.x0
     if idx.size == 0 or problem.n_residuals == 0:
-        r0 = fun(x0) if idx.size else np.zeros(0)
+        r0 = objective.residuals(x0) if idx.size else np.zeros(0)
         c0 = 0.5 * float(r0 @ r0)
-        return FitResult(theta=space.to_theta(prior_phi), cov_phi=np.array(prior_cov),
-                         free=free, cost=c0, cost_start=c0, nfev=calls[0], njev=0,
-                         n_residuals=problem.n_residuals, success=True,
+        return FitResult(theta=space.to_theta(objective.prior_z), cov_z=np.array(prior_cov),
+                         free=objective.free, cost=c0, cost_start=c0, nfev=objective.calls,
+                         njev=0, n_residuals=problem.n_residuals, success=True,
                          message="nothing to fit")
-    r0 = fun(x0)
+    r0 = objective.residuals(x0)
     cost0 = 0.5 * float(r0 @ r0)
     # The subspace solver ("lsmr") needs two free variables: with one, SciPy's 2-D trust
     # region indexes past a 1×1 matrix (IndexError); the dense SVD of an m×1 Jacobian is
     # trivial anyway.
-    res = least_squares(fun, x0, jac=jac, bounds=(lo, hi), method="trf", loss="linear",
+    res = least_squares(objective.residuals, x0, jac=objective.jacobian,
+                        bounds=(objective.lo, objective.hi), method="trf", loss="linear",
                         x_scale=space.prior_sd[idx], max_nfev=max_nfev, ftol=1e-5,
                         xtol=1e-5, gtol=1e-8, tr_solver="lsmr" if idx.size > 1 else "exact")
     x = res.x if res.cost <= cost0 else x0
     cov = np.array(prior_cov, float)
     cov[idx, :] = 0.0
     cov[:, idx] = 0.0
-    cov[np.ix_(idx, idx)] = _posterior(res.jac, res.fun, a_prior, problem)
-    return FitResult(theta=theta_of(x), cov_phi=cov, free=free, cost=float(min(res.cost, cost0)),
-                     cost_start=cost0, nfev=calls[0], njev=int(res.njev or 0),
-                     n_residuals=problem.n_residuals, success=bool(np.all(np.isfinite(x))),
-                     message=str(res.message))
+    cov[np.ix_(idx, idx)] = _posterior(res.jac, res.fun, objective.a_prior, problem)
+    return FitResult(theta=objective.theta_of(x), cov_z=cov, free=objective.free,
+                     cost=float(min(res.cost, cost0)), cost_start=cost0, nfev=objective.calls,
+                     njev=int(res.njev or 0), n_residuals=problem.n_residuals,
+                     success=bool(np.all(np.isfinite(x))), message=str(res.message))
+
+
+class _WindowObjective:
+    """The least-squares problem of :func:`fit_window` in the free coordinates x = z[free]:
+    robustified data residuals stacked on the prior rows, and their Jacobian (forward
+    differences as one batched rollout, or Broyden updates in between)."""
+
+    def __init__(self, problem: WindowProblem, space: ParameterSpace, *, prior_z: np.ndarray,
+                 prior_cov: np.ndarray, free: np.ndarray, loss: str, f_scale: float,
+                 prior_weight: float, broyden: int,
+                 progress: Callable[[int, int, float], None] | None, max_nfev: int) -> None:
+        self.problem, self.space = problem, space
+        self.free = np.asarray(free, bool)
+        self.idx = idx = np.flatnonzero(self.free)
+        self.prior_z = np.asarray(prior_z, float)
+        self.lo, self.hi = space.z_lower[idx], space.z_upper[idx]
+        span = self.hi - self.lo
+        self.x0 = np.clip(self.prior_z[idx], self.lo + 1e-6 * span, self.hi - 1e-6 * span)
+        self.a_prior = _prior_rows(prior_cov[np.ix_(idx, idx)], prior_weight)
+        is_offset = np.arange(space.is_log.size) >= N_PARAMS
+        self.fd_step = np.where(space.is_log, FD_STEP_LOG,
+                                np.where(is_offset, FD_STEP_OFFSET_WM2, FD_STEP_N))[idx]
+        self.loss, self.f_scale = loss, f_scale
+        self.broyden = broyden
+        self.progress, self.max_nfev = progress, max_nfev
+        #: Residual evaluations so far (repeats of the last point are cached, not counted).
+        self.calls = 0
+        self._last: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
+        self._jac: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None  # J, x, r
+        self._since_fd = broyden
+
+    def theta_of(self, x: np.ndarray) -> np.ndarray:
+        z = self.prior_z.copy()
+        z[self.idx] = x
+        return self.space.to_theta(z)
+
+    def rescale(self) -> None:
+        """Each output's residual scale re-estimated at the start point."""
+        if self.problem.n_residuals:
+            start = self.problem.predict(self.theta_of(self.x0)[None])[0]
+            self.problem = self.problem.rescaled(start)
+
+    def residuals(self, x: np.ndarray) -> np.ndarray:
+        """Robustified data residuals, then the prior rows."""
+        if self._last is not None and np.array_equal(self._last[0], x):
+            return self._last[3]
+        e = self.problem.residuals(self.theta_of(x))
+        r, slope = robustify(e, self.loss, self.f_scale)
+        out = np.concatenate([r, self.a_prior @ (x - self.prior_z[self.idx])])
+        self._last = (x.copy(), e, slope, out)
+        self.calls += 1
+        if self.progress is not None:
+            self.progress(self.calls, self.max_nfev, 0.5 * float(out @ out))
+        return out
+
+    def jacobian(self, x: np.ndarray) -> np.ndarray:
+        out = self.residuals(x)
+        m = self.problem.n_residuals
+        if self._jac is not None and self._since_fd < self.broyden:
+            # Broyden rank-one update of the data block (robustified residuals)
+            prev, x_prev, r_prev = self._jac
+            step_x = x - x_prev
+            ss = float(step_x @ step_x)
+            if ss > 0.0:
+                j_data = prev + np.outer(out[:m] - r_prev - prev @ step_x, step_x) / ss
+                self._jac = (j_data, x.copy(), out[:m].copy())
+                self._since_fd += 1
+                return np.vstack([j_data, self.a_prior])
+        j_data = self._finite_differences(x)
+        self._jac = (j_data, x.copy(), out[:m].copy())
+        self._since_fd = 0
+        return np.vstack([j_data, self.a_prior])
+
+    def _finite_differences(self, x: np.ndarray) -> np.ndarray:
+        """Forward differences (backward at an upper bound), all perturbed θ as extra batch
+        rows of one rollout."""
+        assert self._last is not None  # residuals(x) was just evaluated
+        _, e, slope, _ = self._last
+        step = np.where(x + self.fd_step <= self.hi, self.fd_step, -self.fd_step)
+        rows = []
+        for j in range(len(self.idx)):
+            xj = x.copy()
+            xj[j] += step[j]
+            rows.append(self.theta_of(xj))
+        pert = self.problem.residuals_of(self.problem.predict(np.array(rows)))
+        return ((pert - e[None, :]) / step[:, None]).T * slope[:, None]
 
 
 def _posterior(jac: np.ndarray, residual: np.ndarray, a_prior: np.ndarray,
                problem: WindowProblem) -> np.ndarray:
-    """Covariance of the free φ from the final Jacobian and residuals (see module Notes)."""
+    """Covariance of the free z from the final Jacobian and residuals (see module Notes)."""
     m = problem.n_residuals
     j_data = np.asarray(jac)[:m]
     if j_data.shape[1] == 0:
@@ -259,11 +292,11 @@ def _posterior(jac: np.ndarray, residual: np.ndarray, a_prior: np.ndarray,
 
 
 #: The airflow parameters f, c, n (the first stage of :func:`fit_staged`).
-FLOW_PARAMETERS = (I_F, I_C, I_N)
+FLOW_PARAMETERS = (Param.F, Param.C, Param.N)
 TEMPERATURES = OUTPUTS[:5]  # x1..x5
 
 
-def fit_staged(problem: WindowProblem, space: ParameterSpace, *, prior_phi: np.ndarray,
+def fit_staged(problem: WindowProblem, space: ParameterSpace, *, prior_z: np.ndarray,
                prior_cov: np.ndarray, free: np.ndarray, max_nfev: int, rounds: int = 1,
                **options) -> FitResult:
     """Flow parameters from the cavity speed, the rest from the temperatures.
@@ -271,7 +304,7 @@ def fit_staged(problem: WindowProblem, space: ParameterSpace, *, prior_phi: np.n
     Each round: stage 1 fits the free f, c, n to the |v| residuals alone (every other
     parameter held at its current value); stage 2 fits the free heat-transfer
     coefficients and offsets to the x1…x5 residuals alone, with f, c, n held at stage
-    1's estimate. Both stages keep the arrival cost of the prior (``prior_phi``,
+    1's estimate. Both stages keep the arrival cost of the prior (``prior_z``,
     ``prior_cov``). ``rounds`` > 1 alternates the stages towards their common solution,
     where each block is the least-squares estimate from its own measurements given the
     other (needed when the start is far off, e.g. an off-line fit from the defaults).
@@ -295,22 +328,22 @@ def fit_staged(problem: WindowProblem, space: ParameterSpace, *, prior_phi: np.n
     flow[list(FLOW_PARAMETERS)] = True
     speed = problem.only(("v",))
     if not (free & flow).any() or speed.n_residuals == 0:
-        return fit_window(problem, space, prior_phi=prior_phi, prior_cov=prior_cov,
+        return fit_window(problem, space, prior_z=prior_z, prior_cov=prior_cov,
                           free=free, max_nfev=max_nfev, **options)
     temperatures = problem.only(TEMPERATURES)
-    prior_phi = np.asarray(prior_phi, float)
-    start = prior_phi.copy()
+    prior_z = np.asarray(prior_z, float)
+    start = prior_z.copy()
     nfev = njev = 0
     cov_flow = cov_rest = None
     for _ in range(max(rounds, 1)):
-        first = _block(speed, space, start, prior_phi, prior_cov, free & flow, max_nfev,
+        first = _block(speed, space, start, prior_z, prior_cov, free & flow, max_nfev,
                        options)
-        start = space.to_phi(first.theta)
-        second = _block(temperatures, space, start, prior_phi, prior_cov, free & ~flow,
+        start = space.to_z(first.theta)
+        second = _block(temperatures, space, start, prior_z, prior_cov, free & ~flow,
                         max_nfev, options)
-        start = space.to_phi(second.theta)
+        start = space.to_z(second.theta)
         nfev, njev = nfev + first.nfev + second.nfev, njev + first.njev + second.njev
-        cov_flow, cov_rest = first.cov_phi, second.cov_phi
+        cov_flow, cov_rest = first.cov_z, second.cov_z
     assert cov_flow is not None and cov_rest is not None
     cov = np.array(cov_rest)
     fi = np.flatnonzero(free & flow)
@@ -318,7 +351,7 @@ def fit_staged(problem: WindowProblem, space: ParameterSpace, *, prior_phi: np.n
     cov[:, fi] = 0.0
     cov[np.ix_(fi, fi)] = cov_flow[np.ix_(fi, fi)]
     return FitResult(
-        theta=space.to_theta(start), cov_phi=cov, free=free,
+        theta=space.to_theta(start), cov_z=cov, free=free,
         cost=first.cost + second.cost, cost_start=first.cost_start + second.cost_start,
         nfev=nfev, njev=njev, n_residuals=first.n_residuals + second.n_residuals,
         success=first.success and second.success,
@@ -326,11 +359,11 @@ def fit_staged(problem: WindowProblem, space: ParameterSpace, *, prior_phi: np.n
 
 
 def _block(problem: WindowProblem, space: ParameterSpace, start: np.ndarray,
-           prior_phi: np.ndarray, prior_cov: np.ndarray, free: np.ndarray, max_nfev: int,
+           prior_z: np.ndarray, prior_cov: np.ndarray, free: np.ndarray, max_nfev: int,
            options: dict) -> FitResult:
     """Fit the ``free`` block from ``start`` (the other parameters held there), keeping the
-    arrival cost of ``prior_phi`` on the block."""
+    arrival cost of ``prior_z`` on the block."""
     # fit_window starts the free block at its prior mean and holds the rest there
-    held = np.where(free, prior_phi, start)
-    return fit_window(problem, space, prior_phi=held, prior_cov=prior_cov, free=free,
+    held = np.where(free, prior_z, start)
+    return fit_window(problem, space, prior_z=held, prior_cov=prior_cov, free=free,
                       max_nfev=max_nfev, **options)

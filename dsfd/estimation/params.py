@@ -3,7 +3,7 @@
 The fit vector is ϑ = (θ, q) with
 
 * θ = (h_out, h_ca1, h_ca2, h_ca3, h_ca4, h_in, f, c, n) (:data:`PARAMETER_NAMES`), the
-  paper's parameters, fitted in the coordinates log θ except the exponent n (its range
+  paper's parameters, fitted in the coordinates z = log θ except the exponent n (its range
   [0.5, 1] is narrow and not a scale); bounds from the panel configuration (f per
   docs/model.md#parameters);
 * q = (q_x1, q_x2, q_x3, q_x4) [W/m2] (:data:`OFFSET_NAMES`), a constant heat flux added to
@@ -30,14 +30,22 @@ from dataclasses import dataclass
 import numpy as np
 
 from dsfd.config.calibration import Calibration
-from dsfd.config.panel import PARAMETER_NAMES, PanelConfig
+from dsfd.config.panel import PanelConfig
+from dsfd.config.parameters import (
+    FIT_NAMES,
+    N_FIT,
+    N_PARAMS,
+    OFFSET_NAMES,
+    PARAMETER_NAMES,
+    Param,
+)
 from dsfd.physics.coupling import StepInputs
 
-OFFSET_NAMES: tuple[str, ...] = ("q_x1", "q_x2", "q_x3", "q_x4")
-FIT_NAMES: tuple[str, ...] = (*PARAMETER_NAMES, *OFFSET_NAMES)
-N_PARAMS = len(PARAMETER_NAMES)
-N_FIT = len(FIT_NAMES)
-I_H_CA2, I_F, I_C, I_N = (PARAMETER_NAMES.index(k) for k in ("h_ca2", "f", "c", "n"))
+__all__ = ["FIT_NAMES", "N_FIT", "N_PARAMS", "OFFSET_NAMES", "ORIFICE_REGIMES",
+           "PARAMETER_NAMES", "POWER_LAW_REGIMES", "Param", "ParameterSpace", "full_vector",
+           "with_offsets"]
+
+#: The offsets q in ϑ.
 I_Q = np.arange(N_PARAMS, N_FIT)
 #: Regimes whose flow law uses f (orifice paths) and c, n (power-law paths).
 ORIFICE_REGIMES = frozenset({1, 2, 3, 4, 9})
@@ -93,11 +101,9 @@ class ParameterSpace:
         s = settings or cfg.calibration
         p = cfg.parameters
         n_q = len(OFFSET_NAMES)
-        default = np.array([getattr(p, k).default for k in PARAMETER_NAMES] + [0.0] * n_q)
-        lower = np.array([getattr(p, k).lower for k in PARAMETER_NAMES]
-                         + [-s.offset_bound_wm2] * n_q)
-        upper = np.array([getattr(p, k).upper for k in PARAMETER_NAMES]
-                         + [s.offset_bound_wm2] * n_q)
+        default = np.array([*p.values("default"), *[0.0] * n_q])
+        lower = np.array([*p.values("lower"), *[-s.offset_bound_wm2] * n_q])
+        upper = np.array([*p.values("upper"), *[s.offset_bound_wm2] * n_q])
         is_log = np.array([k not in ("n", *OFFSET_NAMES) for k in FIT_NAMES])
         prior_sd = np.array([s.prior_sd_n if k == "n" else s.offset_sd_wm2 if k in OFFSET_NAMES
                              else s.prior_log_sd for k in FIT_NAMES])
@@ -106,43 +112,43 @@ class ParameterSpace:
         fixed = np.array([k in s.fixed for k in FIT_NAMES])
         regimes = set(cfg.openings.available_regimes())
         if cfg.louver is None:
-            fixed[[I_H_CA2, FIT_NAMES.index("q_x4")]] = True
+            fixed[[Param.H_CA2, Param.Q_X4]] = True
         if not regimes & ORIFICE_REGIMES:
-            fixed[I_F] = True
+            fixed[Param.F] = True
         if not regimes & POWER_LAW_REGIMES:
-            fixed[[I_C, I_N]] = True
+            fixed[[Param.C, Param.N]] = True
         if not s.heat_offsets:
             fixed[I_Q] = True
         return cls(default, lower, upper, is_log, prior_sd, drift_sd, fixed)
 
     # ----------------------------------------------------------------- coordinates
-    def to_phi(self, theta: np.ndarray) -> np.ndarray:
-        """Fitting coordinates φ of ϑ (log where :attr:`is_log`)."""
+    def to_z(self, theta: np.ndarray) -> np.ndarray:
+        """Fitting coordinates z of ϑ (log where :attr:`is_log`)."""
         theta = full_vector(theta)
         return np.where(self.is_log, np.log(np.where(self.is_log, theta, 1.0)), theta)
 
-    def to_theta(self, phi: np.ndarray) -> np.ndarray:
-        """ϑ from φ, clipped into the bounds."""
-        phi = np.asarray(phi, float)
-        theta = np.where(self.is_log, np.exp(np.where(self.is_log, phi, 0.0)), phi)
+    def to_theta(self, z: np.ndarray) -> np.ndarray:
+        """ϑ from z, clipped into the bounds."""
+        z = np.asarray(z, float)
+        theta = np.where(self.is_log, np.exp(np.where(self.is_log, z, 0.0)), z)
         return np.clip(theta, self.lower, self.upper)
 
     @property
-    def phi_lower(self) -> np.ndarray:
-        return self.to_phi(self.lower)
+    def z_lower(self) -> np.ndarray:
+        return self.to_z(self.lower)
 
     @property
-    def phi_upper(self) -> np.ndarray:
-        return self.to_phi(self.upper)
+    def z_upper(self) -> np.ndarray:
+        return self.to_z(self.upper)
 
     def clip(self, theta: np.ndarray) -> np.ndarray:
         """ϑ clipped into the bounds."""
         return np.clip(full_vector(theta), self.lower, self.upper)
 
-    def theta_std_error(self, theta: np.ndarray, cov_phi: np.ndarray) -> np.ndarray:
-        """Standard errors in ϑ units from the φ covariance (delta method: σ_θ = θ σ_logθ)."""
-        sd_phi = np.sqrt(np.clip(np.diag(cov_phi), 0.0, None))
-        return np.where(self.is_log, full_vector(theta) * sd_phi, sd_phi)
+    def theta_std_error(self, theta: np.ndarray, cov_z: np.ndarray) -> np.ndarray:
+        """Standard errors in ϑ units from the z covariance (delta method: σ_θ = θ σ_logθ)."""
+        sd_z = np.sqrt(np.clip(np.diag(cov_z), 0.0, None))
+        return np.where(self.is_log, full_vector(theta) * sd_z, sd_z)
 
     # ----------------------------------------------------------------- freedom
     def free_in_window(self, regimes: np.ndarray,
@@ -155,19 +161,19 @@ class ParameterSpace:
         present = set(np.unique(np.asarray(regimes, int)).tolist())
         free = ~self.fixed
         if not present & ORIFICE_REGIMES:
-            free[I_F] = False
+            free[Param.F] = False
         if not present & POWER_LAW_REGIMES:
-            free[[I_C, I_N]] = False
+            free[[Param.C, Param.N]] = False
         for i, name in zip(I_Q, OFFSET_NAMES, strict=True):
             if name[2:] not in measured:
                 free[i] = False
         return free
 
     def first_prior(self) -> tuple[np.ndarray, np.ndarray]:
-        """Mean (φ of the defaults) and covariance (diagonal) of the first prior."""
-        return self.to_phi(self.default), np.diag(self.prior_sd ** 2)
+        """Mean (z of the defaults) and covariance (diagonal) of the first prior."""
+        return self.to_z(self.default), np.diag(self.prior_sd ** 2)
 
-    def grown_prior(self, cov_phi: np.ndarray, hours: float) -> np.ndarray:
+    def grown_prior(self, cov_z: np.ndarray, hours: float) -> np.ndarray:
         """Arrival-cost covariance after ``hours`` of random-walk drift, capped by the first prior.
 
         Notes
@@ -176,7 +182,7 @@ class ParameterSpace:
         variance would exceed that of the first prior is reset to it (and decorrelated),
         so an unexcited parameter never becomes freer than its default allows.
         """
-        cov = np.array(cov_phi, float) + np.diag(self.drift_sd ** 2) * max(hours, 0.0)
+        cov = np.array(cov_z, float) + np.diag(self.drift_sd ** 2) * max(hours, 0.0)
         cap = self.prior_sd ** 2
         over = np.diag(cov) > cap
         if over.any():

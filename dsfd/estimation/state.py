@@ -18,7 +18,11 @@ import numpy as np
 from dsfd.estimation.params import FIT_NAMES, N_FIT, ParameterSpace
 
 SCHEMA = "dsfd.calibration-state"
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
+#: Versions this dsfd reads, and the names version 1 gave the keys that have changed since:
+#: version 2 calls the fit coordinates z (``cov_z``), version 1 called them φ.
+READABLE_VERSIONS = (1, 2)
+RENAMED_IN_VERSION_2 = {"cov_z": "cov_phi", "prior_sd_z": "prior_sd_phi"}
 
 
 class CalibrationStateError(ValueError):
@@ -35,11 +39,11 @@ class CalibrationState:
     theta : ndarray (13,)
         Current estimate ϑ̂ = (θ̂, q̂): h [W/(m2 K)], f [-], c [m3/(s Pa^n)], n [-] and the
         heat-flux offsets q_x1..q_x4 [W/m2] (:mod:`dsfd.estimation.params`).
-    cov_phi : ndarray (13, 13)
+    cov_z : ndarray (13, 13)
         Covariance of ϑ̂ in the fitting coordinates (log θ; n and q linear).
     prior_theta : ndarray (13,)
         Mean of the first prior (the panel defaults when the state was created).
-    prior_sd_phi : ndarray (13,)
+    prior_sd_z : ndarray (13,)
         Spread of the first prior in fitting coordinates.
     last_update_s : float or None, [s]
         UTC unix time of the newest data in the last successful update.
@@ -55,9 +59,9 @@ class CalibrationState:
 
     panel_id: str
     theta: np.ndarray
-    cov_phi: np.ndarray
+    cov_z: np.ndarray
     prior_theta: np.ndarray
-    prior_sd_phi: np.ndarray
+    prior_sd_z: np.ndarray
     last_update_s: float | None = None
     updates: int = 0
     failed_updates: int = 0
@@ -69,12 +73,12 @@ class CalibrationState:
     def initial(cls, panel_id: str, space: ParameterSpace) -> CalibrationState:
         """The state before any data: θ̂ = defaults, covariance = first prior."""
         _mean, cov = space.first_prior()
-        return cls(panel_id=panel_id, theta=space.default.copy(), cov_phi=cov,
-                   prior_theta=space.default.copy(), prior_sd_phi=space.prior_sd.copy())
+        return cls(panel_id=panel_id, theta=space.default.copy(), cov_z=cov,
+                   prior_theta=space.default.copy(), prior_sd_z=space.prior_sd.copy())
 
     def std_error(self, space: ParameterSpace) -> np.ndarray:
         """Standard errors of θ̂ in θ units."""
-        return space.theta_std_error(self.theta, self.cov_phi)
+        return space.theta_std_error(self.theta, self.cov_z)
 
     def to_dict(self, space: ParameterSpace | None = None) -> dict[str, Any]:
         """JSON-ready mapping (parameters by name; covariance rows in name order)."""
@@ -85,9 +89,9 @@ class CalibrationState:
             "panel_id": self.panel_id,
             "parameter_names": names,
             "theta": {k: float(v) for k, v in zip(names, self.theta, strict=True)},
-            "cov_phi": [[float(v) for v in row] for row in self.cov_phi],
+            "cov_z": [[float(v) for v in row] for row in self.cov_z],
             "prior_theta": {k: float(v) for k, v in zip(names, self.prior_theta, strict=True)},
-            "prior_sd_phi": {k: float(v) for k, v in zip(names, self.prior_sd_phi,
+            "prior_sd_z": {k: float(v) for k, v in zip(names, self.prior_sd_z,
                                                          strict=True)},
             "last_update_s": self.last_update_s,
             "updates": self.updates,
@@ -151,9 +155,12 @@ def state_from_dict(doc: Any, *, space: ParameterSpace, panel_id: str) -> Calibr
     if doc.get("schema") != SCHEMA:
         raise CalibrationStateError(f"key 'schema': expected {SCHEMA!r}, got "
                                     f"{doc.get('schema')!r}")
-    if doc.get("schema_version") != SCHEMA_VERSION:
-        raise CalibrationStateError(f"key 'schema_version': {doc.get('schema_version')!r} is "
-                                    f"not supported (this dsfd reads {SCHEMA_VERSION})")
+    version = doc.get("schema_version")
+    if version not in READABLE_VERSIONS:
+        raise CalibrationStateError(f"key 'schema_version': {version!r} is not supported "
+                                    f"(this dsfd reads {', '.join(map(str, READABLE_VERSIONS))})")
+    renamed = RENAMED_IN_VERSION_2 if version == 1 else {}
+    cov_key, prior_sd_key = (renamed.get(k, k) for k in ("cov_z", "prior_sd_z"))
     if doc.get("panel_id") != panel_id:
         raise CalibrationStateError(f"key 'panel_id': state is for panel "
                                     f"{doc.get('panel_id')!r}, not {panel_id!r}")
@@ -166,15 +173,17 @@ def state_from_dict(doc: Any, *, space: ParameterSpace, panel_id: str) -> Calibr
             raise CalibrationStateError(
                 f"key 'theta.{name}': {theta[i]:g} outside the panel bounds "
                 f"[{space.lower[i]:g}, {space.upper[i]:g}]")
-    cov = doc.get("cov_phi")
+    cov = doc.get(cov_key)
     try:
         cov = np.array(cov, dtype=float)
     except (TypeError, ValueError):
-        raise CalibrationStateError("key 'cov_phi': expected a 13 x 13 list of numbers") from None
+        raise CalibrationStateError(f"key {cov_key!r}: expected a 13 x 13 list of "
+                                    "numbers") from None
     if cov.shape != (N_FIT, N_FIT) or not np.all(np.isfinite(cov)):
-        raise CalibrationStateError("key 'cov_phi': expected a 13 x 13 list of finite numbers")
+        raise CalibrationStateError(f"key {cov_key!r}: expected a 13 x 13 list of finite "
+                                    "numbers")
     if not np.allclose(cov, cov.T, rtol=1e-6, atol=1e-12) or np.any(np.diag(cov) <= 0):
-        raise CalibrationStateError("key 'cov_phi': not a covariance (asymmetric or "
+        raise CalibrationStateError(f"key {cov_key!r}: not a covariance (asymmetric or "
                                     "non-positive diagonal)")
     free = doc.get("free_last", [])
     if not isinstance(free, list) or any(k not in FIT_NAMES for k in free):
@@ -183,9 +192,9 @@ def state_from_dict(doc: Any, *, space: ParameterSpace, panel_id: str) -> Calibr
     return CalibrationState(
         panel_id=panel_id,
         theta=theta,
-        cov_phi=0.5 * (cov + cov.T),
+        cov_z=0.5 * (cov + cov.T),
         prior_theta=_vector(doc, "prior_theta"),
-        prior_sd_phi=_vector(doc, "prior_sd_phi"),
+        prior_sd_z=_vector(doc, prior_sd_key),
         last_update_s=_number(doc, "last_update_s", allow_none=True),
         updates=_count(doc, "updates"),
         failed_updates=_count(doc, "failed_updates"),

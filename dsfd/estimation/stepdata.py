@@ -20,23 +20,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dsfd.config.panel import PanelConfig
+from dsfd.config.panel import Facade, PanelConfig, Room
 from dsfd.measured import MeasuredData, MeasuredDataError, iso_utc
+from dsfd.physics.boundary import WeatherInputs, model_weather
 from dsfd.physics.constants import T_ZERO
 from dsfd.physics.coupling import StepInputs
-from dsfd.physics.forcing import (
-    FacadeOptics,
-    Forcing,
-    WeatherInputs,
-    facade_forcing,
-    step_inputs,
-)
+from dsfd.physics.forcing import FacadeOptics, Forcing, facade_forcing, step_inputs
 
 #: Measured state columns x1..x5, in state order.
 STATE_COLUMNS = ("x1_c", "x2_c", "x3_c", "x4_c", "x5_c")
 #: Relative tolerance on the row spacing for a step to count as one model step.
 SPACING_TOLERANCE = 0.02
-STANDARD_PRESSURE_PA = 101325.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -104,14 +98,6 @@ def _filled(time_s: np.ndarray, values: np.ndarray) -> np.ndarray:
     return np.interp(time_s, time_s[ok], values[ok])
 
 
-def _dew_point_k(t_c: np.ndarray, rh_pct: np.ndarray) -> np.ndarray:
-    """Magnus-formula dew point [K] (Alduchov & Eskridge 1996); NaN where RH is unknown."""
-    a, b = 17.625, 243.04
-    with np.errstate(invalid="ignore", divide="ignore"):
-        gamma = np.log(np.clip(rh_pct, 1e-3, 100.0) / 100.0) + a * t_c / (b + t_c)
-        return b * gamma / (a - gamma) + T_ZERO
-
-
 def _controls(cfg: PanelConfig, data: MeasuredData, notes: list[str]):
     n_rows = len(data)
     src = data.source or "measured data"
@@ -143,9 +129,10 @@ def _controls(cfg: PanelConfig, data: MeasuredData, notes: list[str]):
     return afr.astype(int), np.radians(phi), np.clip(or_, 0.0, 1.0)
 
 
-def weather_of_steps(cfg: PanelConfig, data: MeasuredData,
+def weather_of_steps(data: MeasuredData, *, room: Room, facade: Facade,
                      notes: list[str] | None = None) -> WeatherInputs:
-    """Weather of each step (from the row that ends it) at the step midpoints, SI units."""
+    """Weather of each step (from the row that ends it) at the step midpoints, SI units,
+    for a panel with these ``room`` and ``facade`` sections (what was not measured)."""
     notes = [] if notes is None else notes
     src = data.source or "measured data"
     t_rows = data.time_s
@@ -163,43 +150,30 @@ def weather_of_steps(cfg: PanelConfig, data: MeasuredData,
     if not (data.has("ghi_wm2") or poa_ok):
         raise MeasuredDataError(f"{src}: irradiance missing: need column 'ghi_wm2' or both "
                                 "'poa_wm2' and 'poa_diffuse_wm2'")
-    n = t_mid.shape[0]
-    nan = np.full(n, np.nan)
-    if data.has("wind_speed_ms"):
-        wind = filled("wind_speed_ms")
-    else:
-        wind = np.zeros(n)
+    if not data.has("wind_speed_ms"):
         notes.append("no wind_speed_ms column: calm assumed")
-    wind_dir = filled("wind_dir_deg") if data.has("wind_dir_deg") else np.full(
-        n, cfg.facade.azimuth_deg)
-    pressure = (filled("pressure_hpa") * 100.0 if data.has("pressure_hpa")
-                else np.full(n, STANDARD_PRESSURE_PA))
+    t_in_c = None
     if data.has("t_room_c"):
         room_rows = _filled(t_rows, data.get("t_room_c"))
-        t_in = 0.5 * (room_rows[:-1] + room_rows[1:]) + T_ZERO
+        t_in_c = 0.5 * (room_rows[:-1] + room_rows[1:])
     else:
-        t_in = np.full(n, cfg.room.t_in_c + T_ZERO)
-        notes.append(f"no t_room_c column: room at {cfg.room.t_in_c:g} degC")
-    t_mrt = t_in if cfg.room.t_mrt_c is None else np.full(n, cfg.room.t_mrt_c + T_ZERO)
-    t_out_c = filled("t_out_c")
-    ghi = np.clip(filled("ghi_wm2"), 0.0, None) if data.has("ghi_wm2") else nan
-    dni = np.clip(col("dni_wm2"), 0.0, None) if data.has("dni_wm2") else nan
-    dhi = np.clip(col("dhi_wm2"), 0.0, None) if data.has("dhi_wm2") else nan
-    return WeatherInputs(
-        time_s=t_mid,
-        t_out_k=t_out_c + T_ZERO,
-        ghi_wm2=ghi,
-        dni_wm2=dni,
-        dhi_wm2=dhi,
-        wind_speed_ms=np.clip(wind, 0.0, None),
-        wind_dir_deg=wind_dir,
-        pressure_pa=pressure,
-        t_in_k=t_in,
-        t_mrt_k=t_mrt,
-        t_dew_k=_dew_point_k(t_out_c, col("rh_pct")) if data.has("rh_pct") else nan,
+        notes.append(f"no t_room_c column: room at {room.t_in_c:g} degC")
+
+    def optional(name: str, fill: bool = True) -> np.ndarray | None:
+        if not data.has(name):
+            return None
+        return filled(name) if fill else col(name)
+
+    pressure_hpa = optional("pressure_hpa")
+    return model_weather(
+        time_s=t_mid, t_out_c=filled("t_out_c"), ghi_wm2=optional("ghi_wm2"),
+        dni_wm2=optional("dni_wm2", fill=False), dhi_wm2=optional("dhi_wm2", fill=False),
+        wind_speed_ms=optional("wind_speed_ms"), wind_dir_deg=optional("wind_dir_deg"),
+        pressure_pa=None if pressure_hpa is None else pressure_hpa * 100.0,
+        rh_pct=optional("rh_pct", fill=False), t_in_c=t_in_c,
         poa_global_wm2=filled("poa_wm2") if poa_ok else None,
         poa_diffuse_wm2=filled("poa_diffuse_wm2") if poa_ok else None,
-    )
+        room=room, facade_azimuth_deg=facade.azimuth_deg)
 
 
 def step_data(cfg: PanelConfig, data: MeasuredData) -> StepData:
@@ -220,7 +194,7 @@ def step_data(cfg: PanelConfig, data: MeasuredData) -> StepData:
     notes: list[str] = []
     step_s = data.step_s
     regime, phi, or_ = _controls(cfg, data, notes)
-    weather = weather_of_steps(cfg, data, notes)
+    weather = weather_of_steps(data, room=cfg.room, facade=cfg.facade, notes=notes)
     forcing = facade_forcing(cfg, weather)
     column = Forcing(*(np.asarray(v)[:, None] for v in forcing))
     loads = FacadeOptics(cfg).loads(column, phi[:-1])

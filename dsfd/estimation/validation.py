@@ -20,6 +20,7 @@ replayed but not scored.
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -127,11 +128,138 @@ def paired_difference(err_a: np.ndarray, err_b: np.ndarray, batch: int) -> tuple
     return float(np.mean(d)), float(np.std(means, ddof=1) / np.sqrt(k))
 
 
+@dataclass(frozen=True)
+class HorizonScores:
+    """Table 2 at one lead time: mean absolute differences of x1..x5 [K] (= degC).
+
+    Attributes
+    ----------
+    mae_c : dict model → dict state → float
+        Per state measured in the record (states without a finite target left out).
+    mean_mae_c : dict model → float
+        Mean over the states in ``mae_c[model]``.
+    paired : dict model → dict state → (diff, se)
+        Self-calibrating minus that model, the paired difference of the absolute errors and
+        its standard error (:func:`paired_difference`); only where the standard error is
+        finite. Empty without the self-calibrating model.
+    """
+
+    mae_c: dict[str, dict[str, float]]
+    mean_mae_c: dict[str, float]
+    paired: dict[str, dict[str, tuple[float, float]]]
+
+
+@dataclass(frozen=True)
+class RegimeVelocity:
+    """Table 1 for one commanded regime: the cavity speed |v| one step ahead [cm/s].
+
+    Attributes
+    ----------
+    measured_mean_cms : float
+        Mean reading of the anemometer.
+    samples : int
+    mae_cms : dict model → float
+        Mean absolute difference against the readings.
+    sensor_mae_cms : float or None
+        The anemometer against the reference speed (what a perfect model would score).
+    true_mae_cms : dict model → float, or None
+        Mean absolute difference against the reference speed (None without a reference).
+    """
+
+    measured_mean_cms: float
+    samples: int
+    mae_cms: dict[str, float]
+    sensor_mae_cms: float | None = None
+    true_mae_cms: dict[str, float] | None = None
+
+
+@dataclass(frozen=True)
+class ReplayScores:
+    """What :func:`replay_scores` measured; :meth:`flat` is the flat form the JSON files hold.
+
+    Attributes
+    ----------
+    steps, scored_starts, online_updates : int
+    step_s : float, [s]
+    models : tuple of str
+        The models compared, in order (``online``, ``offline``, ``uncalibrated``,
+        ``persistence`` as present); empty when no row was scored.
+    horizons : dict lead time [steps] → HorizonScores
+    measured_mean_c : dict state → float, [degC]
+        Mean measured temperature over the scored rows.
+    velocity : dict regime → RegimeVelocity
+    final_theta : dict model → ndarray (13,)
+        The last fit vector of ``online`` and ``offline``.
+    """
+
+    steps: int
+    step_s: float
+    scored_starts: int
+    online_updates: int
+    models: tuple[str, ...] = ()
+    horizons: dict[int, HorizonScores] = field(default_factory=dict)
+    measured_mean_c: dict[str, float] = field(default_factory=dict)
+    velocity: dict[int, RegimeVelocity] = field(default_factory=dict)
+    final_theta: dict[str, np.ndarray] = field(default_factory=dict)
+
+    def mae_c(self, model: str, horizon: int, state: str) -> float | None:
+        """Table 2 cell; ``state`` ``"mean"`` for the mean over the states (None if absent)."""
+        h = self.horizons.get(horizon)
+        if h is None:
+            return None
+        if state == "mean":
+            return h.mean_mae_c.get(model)
+        return h.mae_c.get(model, {}).get(state)
+
+    def scored_models(self) -> tuple[str, ...]:
+        """The models with at least one score."""
+        return tuple(m for m in self.models
+                     if any(h.mae_c.get(m) for h in self.horizons.values())
+                     or self.velocity or m in self.final_theta)
+
+    def flat(self) -> dict[str, float]:
+        """Flat keys, units in the names: ``<model>.h<N>.<state>_mae_c``,
+        ``<model>.h<N>.mean_mae_c``, ``online_vs_<model>.h<N>.<state>_mae_diff_c`` and
+        ``..._mae_diff_se_c``, ``measured.<state>_mean_c``,
+        ``measured.velocity_mean_cms.regime_<r>``, ``measured.velocity_samples.regime_<r>``,
+        ``sensor.velocity_mae_cms.regime_<r>``, ``<model>.velocity_mae_cms.regime_<r>``,
+        ``<model>.velocity_true_mae_cms.regime_<r>``, ``<model>.theta.<name>``, the counts and
+        the step."""
+        out: dict[str, float] = {"steps": float(self.steps), "step_s": self.step_s,
+                                 "scored_starts": float(self.scored_starts),
+                                 "online_updates": float(self.online_updates)}
+        for h, hs in self.horizons.items():
+            for m in self.models:
+                for s, mae in hs.mae_c.get(m, {}).items():
+                    out[f"{m}.h{h}.{s}_mae_c"] = mae
+                if m in hs.mean_mae_c:
+                    out[f"{m}.h{h}.mean_mae_c"] = hs.mean_mae_c[m]
+            for m, by_state in hs.paired.items():
+                for s, (diff, se) in by_state.items():
+                    out[f"online_vs_{m}.h{h}.{s}_mae_diff_c"] = diff
+                    out[f"online_vs_{m}.h{h}.{s}_mae_diff_se_c"] = se
+        for s, mean in self.measured_mean_c.items():
+            out[f"measured.{s}_mean_c"] = mean
+        for r, v in self.velocity.items():
+            out[f"measured.velocity_mean_cms.regime_{r}"] = v.measured_mean_cms
+            out[f"measured.velocity_samples.regime_{r}"] = float(v.samples)
+            if v.sensor_mae_cms is not None:
+                out[f"sensor.velocity_mae_cms.regime_{r}"] = v.sensor_mae_cms
+            for m in self.models:
+                out[f"{m}.velocity_mae_cms.regime_{r}"] = v.mae_cms[m]
+                if v.true_mae_cms is not None:
+                    out[f"{m}.velocity_true_mae_cms.regime_{r}"] = v.true_mae_cms[m]
+        for m, theta in self.final_theta.items():
+            for k, value in zip(FIT_NAMES, theta, strict=True):
+                out[f"{m}.theta.{k}"] = float(value)
+        return out
+
+
 def replay_scores(cfg: PanelConfig, steps: StepData, *, offline_theta: np.ndarray | None = None,
                   horizons: tuple[int, ...] = (1, 15), warmup_h: float = 0.0,
                   online: bool = True, reference_v_ms: np.ndarray | None = None,
-                  progress: Callable[[int, int, int], None] | None = None) -> dict[str, float]:
-    """Scores of the models on a measured record (flat keys, units in the names).
+                  progress: Callable[[int, int, int], None] | None = None) -> ReplayScores:
+    """Scores of the models on a measured record (module docstring).
 
     Parameters
     ----------
@@ -149,19 +277,13 @@ def replay_scores(cfg: PanelConfig, steps: StepData, *, offline_theta: np.ndarra
         Run the self-calibrating model (the slow part).
     reference_v_ms : array (n + 1,), optional, [m/s]
         The true cavity speed |v| at the probe at each row (a simulation's ``truth_v_cav_ms``).
-        Adds the velocity scores against it (``<model>.velocity_true_mae_cms.regime_<r>``)
-        and the anemometer's own error (``sensor.velocity_mae_cms.regime_<r>``: the score a
-        perfect model would get against the readings).
+        Adds the velocity scores against it and the anemometer's own error against it (the
+        score a perfect model would get against the readings).
     progress : callable (row, rows, updates), optional
 
     Returns
     -------
-    dict
-        ``<model>.h<N>.<state>_mae_c``, ``<model>.h<N>.mean_mae_c``,
-        ``<model>.velocity_mae_cms.regime_<r>``, ``measured.velocity_mean_cms.regime_<r>``,
-        ``online_vs_<model>.h<N>.<state>_mae_diff_c`` and ``..._mae_diff_se_c`` (the paired
-        difference of the absolute errors and its standard error, :func:`paired_difference`),
-        ``measured.<state>_mean_c``, ``online.theta.<name>``, counts and the step.
+    ReplayScores
     """
     model = LumpedModel(model_config(cfg, steps.step_s))
     names = (["online"] if online else []) + (["offline"] if offline_theta is not None else [])
@@ -171,72 +293,87 @@ def replay_scores(cfg: PanelConfig, steps: StepData, *, offline_theta: np.ndarra
                        for m in names], float)
     calibrator = OnlineCalibrator(model) if online else None
     theta_k, x_hat, updates = _observer_replay(model, steps, thetas, calibrator, progress)
-    n = steps.n_steps
     h_max = max(horizons)
-    scored = steps.time_s[:-1] >= steps.time_s[0] + warmup_h * 3600.0
-    valid_run = np.array([steps.valid[k:k + h_max].all() for k in range(n)])
-    starts = np.flatnonzero(scored & valid_run & (np.arange(n) + h_max <= n))
-    out: dict[str, float] = {"steps": float(n), "step_s": steps.step_s,
-                             "scored_starts": float(len(starts)), "online_updates": float(updates)}
+    starts = _scored_starts(steps, h_max, warmup_h)
     if len(starts) == 0:
-        return out
-    y = steps.y_k
-    held = _held(y)
-    preds: dict[str, tuple[np.ndarray, np.ndarray]] = {}
-    for i, m in enumerate(names):
-        preds[m] = _rollouts(model, steps, starts, x_hat[i, starts], theta_k[i, starts], h_max)
+        return ReplayScores(steps.n_steps, steps.step_s, 0, int(updates))
+    preds = {m: _rollouts(model, steps, starts, x_hat[i, starts], theta_k[i, starts], h_max)
+             for i, m in enumerate(names)}
+    models = (*names, "persistence")
     present = [j for j, s in enumerate(STATES) if s in steps.present]
     batch = max(4 * h_max, round(3600.0 / steps.step_s))
-    for h in horizons:
-        target = y[starts + h]
-        common = np.isfinite(target) & np.isfinite(held[starts])
-        errs: dict[str, np.ndarray] = {}
-        for m in [*names, "persistence"]:
-            pred = held[starts] if m == "persistence" else preds[m][0][:, h, :5]
-            err = errs[m] = np.abs(pred - target)
-            maes = []
+    return ReplayScores(
+        steps.n_steps, steps.step_s, len(starts), int(updates), models=models,
+        horizons={h: _horizon_scores(steps, starts, h, preds, present, batch) for h in horizons},
+        measured_mean_c={STATES[j]: float(np.nanmean(steps.y_k[starts, j]) - T_ZERO)
+                         for j in present},
+        velocity=(_velocity_scores(steps, starts, preds, reference_v_ms)
+                  if "v" in steps.present else {}),
+        final_theta={m: theta_k[i, -1] for i, m in enumerate(names)
+                     if m in ("online", "offline")})
+
+
+def _scored_starts(steps: StepData, h_max: int, warmup_h: float) -> np.ndarray:
+    """Rows scored: after the warm-up, with ``h_max`` valid steps ahead inside the record."""
+    n = steps.n_steps
+    scored = steps.time_s[:-1] >= steps.time_s[0] + warmup_h * 3600.0
+    valid_run = np.array([steps.valid[k:k + h_max].all() for k in range(n)])
+    return np.flatnonzero(scored & valid_run & (np.arange(n) + h_max <= n))
+
+
+def _horizon_scores(steps: StepData, starts: np.ndarray, h: int,
+                    preds: dict[str, tuple[np.ndarray, np.ndarray]], present: list[int],
+                    batch: int) -> HorizonScores:
+    """Table 2 at lead time ``h``: every model, and persistence, on the same samples (those
+    with a finite target and a finite last reading)."""
+    target = steps.y_k[starts + h]
+    held = _held(steps.y_k)[starts]
+    common = np.isfinite(target) & np.isfinite(held)
+    errs: dict[str, np.ndarray] = {}
+    mae_c: dict[str, dict[str, float]] = {}
+    mean_mae_c: dict[str, float] = {}
+    for m in [*preds, "persistence"]:
+        pred = held if m == "persistence" else preds[m][0][:, h, :5]
+        err = errs[m] = np.abs(pred - target)
+        maes = mae_c[m] = {STATES[j]: float(np.mean(err[common[:, j], j]))
+                           for j in present if common[:, j].any()}
+        if maes:
+            mean_mae_c[m] = float(np.mean(list(maes.values())))
+    paired: dict[str, dict[str, tuple[float, float]]] = {}
+    if "online" in errs:
+        for m in [x for x in errs if x != "online"]:
+            pairs = paired[m] = {}
             for j in present:
                 ok = common[:, j]
-                if ok.any():
-                    mae = float(np.mean(err[ok, j]))
-                    out[f"{m}.h{h}.{STATES[j]}_mae_c"] = mae
-                    maes.append(mae)
-            if maes:
-                out[f"{m}.h{h}.mean_mae_c"] = float(np.mean(maes))
-        if "online" in errs:
-            for m in [x for x in errs if x != "online"]:
-                for j in present:
-                    ok = common[:, j]
-                    diff, se = paired_difference(errs["online"][ok, j], errs[m][ok, j], batch)
-                    if np.isfinite(se):
-                        out[f"online_vs_{m}.h{h}.{STATES[j]}_mae_diff_c"] = diff
-                        out[f"online_vs_{m}.h{h}.{STATES[j]}_mae_diff_se_c"] = se
-    for j in present:
-        out[f"measured.{STATES[j]}_mean_c"] = float(np.nanmean(y[starts, j]) - T_ZERO)
-    if "v" in steps.present:
-        v_meas = steps.v_ms[starts + 1]
-        regime = steps.regime[starts]
-        v_held = _held(steps.v_ms[:, None])[:, 0][starts]
-        ok = np.isfinite(v_meas) & np.isfinite(v_held)
-        for r in np.unique(regime[ok]):
-            sel = ok & (regime == r)
-            out[f"measured.velocity_mean_cms.regime_{r}"] = float(np.mean(v_meas[sel]) * 100)
-            out[f"measured.velocity_samples.regime_{r}"] = float(sel.sum())
-            v_true = (None if reference_v_ms is None
-                      else np.abs(np.asarray(reference_v_ms, float))[starts + 1])
-            if v_true is not None:
-                out[f"sensor.velocity_mae_cms.regime_{r}"] = float(
-                    np.nanmean(np.abs(v_meas[sel] - v_true[sel])) * 100)
-            for m in [*names, "persistence"]:
-                v = v_held if m == "persistence" else preds[m][1][:, 0]
-                out[f"{m}.velocity_mae_cms.regime_{r}"] = float(
-                    np.mean(np.abs(v[sel] - v_meas[sel])) * 100)
-                if v_true is not None:
-                    out[f"{m}.velocity_true_mae_cms.regime_{r}"] = float(
-                        np.nanmean(np.abs(v[sel] - v_true[sel])) * 100)
-    for i, m in enumerate(names):
-        if m in ("online", "offline"):
-            final = theta_k[i, -1]
-            for k, v in zip(FIT_NAMES, final, strict=True):
-                out[f"{m}.theta.{k}"] = float(v)
+                diff, se = paired_difference(errs["online"][ok, j], errs[m][ok, j], batch)
+                if np.isfinite(se):
+                    pairs[STATES[j]] = (diff, se)
+    return HorizonScores(mae_c, mean_mae_c, paired)
+
+
+def _velocity_scores(steps: StepData, starts: np.ndarray,
+                     preds: dict[str, tuple[np.ndarray, np.ndarray]],
+                     reference_v_ms: np.ndarray | None) -> dict[int, RegimeVelocity]:
+    """Table 1: |v| one step ahead per commanded regime, against the readings (and the
+    reference speed, if given), on the samples with a reading and a last reading."""
+    v_meas = steps.v_ms[starts + 1]
+    regime = steps.regime[starts]
+    v_held = _held(steps.v_ms[:, None])[:, 0][starts]
+    v_true = (None if reference_v_ms is None
+              else np.abs(np.asarray(reference_v_ms, float))[starts + 1])
+    v_pred = {m: pred[1][:, 0] for m, pred in preds.items()} | {"persistence": v_held}
+    ok = np.isfinite(v_meas) & np.isfinite(v_held)
+    out: dict[int, RegimeVelocity] = {}
+    for r in np.unique(regime[ok]):
+        sel = ok & (regime == r)
+        out[int(r)] = RegimeVelocity(
+            measured_mean_cms=float(np.mean(v_meas[sel]) * 100),
+            samples=int(sel.sum()),
+            mae_cms={m: float(np.mean(np.abs(v[sel] - v_meas[sel])) * 100)
+                     for m, v in v_pred.items()},
+            sensor_mae_cms=(None if v_true is None else
+                            float(np.nanmean(np.abs(v_meas[sel] - v_true[sel])) * 100)),
+            true_mae_cms=(None if v_true is None else
+                          {m: float(np.nanmean(np.abs(v[sel] - v_true[sel])) * 100)
+                           for m, v in v_pred.items()}))
     return out

@@ -19,7 +19,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dsfd.config.panel import PanelConfig
+from dsfd.config.panel import Facade, Openings
 from dsfd.physics.constants import GRAVITY, R_AIR
 
 EB, ET, IB, IT = 0, 1, 2, 3
@@ -83,8 +83,9 @@ class AirflowGeometry:
     cp_top: np.ndarray
 
     @classmethod
-    def from_panel(cls, cfg: PanelConfig) -> AirflowGeometry:
-        ops = cfg.openings
+    def from_sections(cls, openings: Openings, facade: Facade) -> AirflowGeometry:
+        """The geometry of a panel's ``openings`` and ``facade`` sections."""
+        ops = openings
         area = np.zeros(4)
         cd = np.full(4, 0.6)
         for k, name in enumerate(OPENING_NAMES):
@@ -97,8 +98,8 @@ class AirflowGeometry:
             area_m2=area,
             discharge=cd,
             stack_height_m=ops.stack_height_m,
-            cavity_area_m2=cfg.facade.cavity_depth_m * cfg.facade.width_m,
-            facade_area_m2=cfg.facade.width_m * cfg.facade.glazed_height_m,
+            cavity_area_m2=facade.cavity_depth_m * facade.width_m,
+            facade_area_m2=facade.width_m * facade.glazed_height_m,
             min_opening_ratio=ops.min_opening_ratio,
             dp_reg_pa=ops.regularisation_pa,
             room_pressure_pa=ops.room_pressure_pa,

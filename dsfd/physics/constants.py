@@ -9,6 +9,6 @@ GRAVITY = 9.81
 #: Specific gas constant of dry air [J/(kg K)].
 R_AIR = 287.05
 #: Standard atmospheric pressure [Pa].
-P_STD = 101325.0
+STANDARD_PRESSURE_PA = 101325.0
 #: 0 °C in kelvin [K].
 T_ZERO = 273.15

@@ -19,6 +19,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from dsfd.config.parameters import Param
 from dsfd.physics.airflow import IB, IT, AirflowGeometry, FlowState
 from dsfd.physics.cavity_profile import outlet_excess_ratio
 from dsfd.physics.constants import SIGMA
@@ -165,7 +166,7 @@ def secant(t_a: np.ndarray, t_b: np.ndarray) -> np.ndarray:
 def frozen_network(nc: NetworkConstants, x: np.ndarray, inp: StepInputs,
                    theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, Boundary]:
     """L0, q0 without airflow, radiative conductances linearised at x (docs/model.md#network)."""
-    h_out, h_in = theta[:, 0], theta[:, 5]
+    h_out, h_in = theta[:, Param.H_OUT], theta[:, Param.H_IN]
     # Secant radiative slopes of the pairs (x2,x3) (x1,x4) (x1,x2) (x4,x2) (x1,T_rad) (x3,T_mrt).
     # Columns are filled in place: this runs every step of every rollout, and for small
     # batches the array bookkeeping of stack() costs more than the arithmetic.
@@ -178,11 +179,12 @@ def frozen_network(nc: NetworkConstants, x: np.ndarray, inp: StepInputs,
     sec = secant(t_a, t_b)
     lw = inp.lw_exchange
     cond = np.empty((nb, 9))
-    cond[:, 0] = theta[:, 1]
-    cond[:, 1] = nc.slat_area_ratio * theta[:, 2] if nc.has_louver else NO_LOUVER_LINK
-    cond[:, 2] = theta[:, 3]
-    cond[:, 3] = theta[:, 4]
-    cond[:, 4] = theta[:, 4]
+    cond[:, 0] = theta[:, Param.H_CA1]
+    cond[:, 1] = (nc.slat_area_ratio * theta[:, Param.H_CA2] if nc.has_louver
+                  else NO_LOUVER_LINK)
+    cond[:, 2] = theta[:, Param.H_CA3]
+    cond[:, 3] = theta[:, Param.H_CA4]
+    cond[:, 4] = theta[:, Param.H_CA4]
     cond[:, 5] = nc.h_r23_factor * sec[:, 0]
     cond[:, 6:9] = lw[:, :3] * sec[:, 1:4]
     zero = np.zeros(nb)

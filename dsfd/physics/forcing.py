@@ -26,6 +26,7 @@ import numpy as np
 
 from dsfd.config.panel import PanelConfig
 from dsfd.physics.airflow import AirflowGeometry, louver_flow_loss
+from dsfd.physics.boundary import WeatherInputs, sky_dew_point_k
 from dsfd.physics.constants import T_ZERO
 from dsfd.physics.coupling import StepInputs
 from dsfd.physics.longwave import (
@@ -42,47 +43,6 @@ from dsfd.physics.solar import erbs, extraterrestrial_irradiance, facade_irradia
 TERRAIN_PROFILE = {"ocean": (0.10, 210.0), "flat": (0.14, 270.0), "rough": (0.22, 370.0),
                    "city": (0.33, 460.0)}
 MET_HEIGHT_M = 10.0
-
-
-class WeatherInputs(NamedTuple):
-    """Weather at the step midpoints (arrays (n,), SI units, kelvin).
-
-    Attributes
-    ----------
-    time_s : [s]
-        UTC unix time of each step's midpoint.
-    t_out_k : [K]
-    ghi_wm2, dni_wm2, dhi_wm2 : [W/m2]
-        NaN in DNI/DHI means "not measured": Erbs decomposes GHI there.
-    wind_speed_ms : [m/s]
-        At the 10 m met mast.
-    wind_dir_deg : [deg]
-        Direction the wind comes from, clockwise from north.
-    pressure_pa : [Pa]
-    t_in_k, t_mrt_k : [K]
-        Room air and mean radiant temperature.
-    t_dew_k : [K]
-        Dew point (NaN if unknown; only the Clark–Allen sky model uses it).
-    poa_global_wm2, poa_diffuse_wm2 : [W/m2], optional
-        Measured total and diffuse irradiance on the façade plane. Where both are finite
-        they replace the decomposition and transposition of GHI/DNI/DHI: beam on the
-        façade = total − diffuse (0 with the sun behind the façade, which then counts as
-        diffuse). ``None`` (default) or NaN: computed from GHI/DNI/DHI as before.
-    """
-
-    time_s: np.ndarray
-    t_out_k: np.ndarray
-    ghi_wm2: np.ndarray
-    dni_wm2: np.ndarray
-    dhi_wm2: np.ndarray
-    wind_speed_ms: np.ndarray
-    wind_dir_deg: np.ndarray
-    pressure_pa: np.ndarray
-    t_in_k: np.ndarray
-    t_mrt_k: np.ndarray
-    t_dew_k: np.ndarray
-    poa_global_wm2: np.ndarray | None = None
-    poa_diffuse_wm2: np.ndarray | None = None
 
 
 class Forcing(NamedTuple):
@@ -156,8 +116,7 @@ def facade_forcing(cfg: PanelConfig, w: WeatherInputs, *,
                            albedo=site.albedo, dni_extra=dni_extra,
                            model=transposition or cfg.model.transposition)
     if cfg.model.sky_model == "clark_allen":
-        dew = np.where(np.isfinite(w.t_dew_k), w.t_dew_k, w.t_out_k - 5.0)
-        t_sky = sky_temperature_clark_allen(w.t_out_k, dew, 0.0)
+        t_sky = sky_temperature_clark_allen(w.t_out_k, sky_dew_point_k(w), 0.0)
     else:
         t_sky = sky_temperature_swinbank(w.t_out_k)
     beam, diffuse = fi.beam, fi.sky_diffuse + fi.ground_diffuse
@@ -166,7 +125,7 @@ def facade_forcing(cfg: PanelConfig, w: WeatherInputs, *,
         front = (fi.aoi_deg < 90.0) & ~below
         beam = np.where(use, np.where(front, np.clip(total - diff, 0.0, None), 0.0), beam)
         diffuse = np.where(use, np.where(front, diff, total), diffuse)
-    geom = AirflowGeometry.from_panel(cfg)
+    geom = AirflowGeometry.from_sections(cfg.openings, cfg.facade)
     cp_b, cp_t = geom.wind_pressure_coefficients(w.wind_dir_deg, fac.azimuth_deg)
     return Forcing(
         time_s=np.asarray(w.time_s, float),

@@ -8,7 +8,7 @@ inputs (weather, sun, optics) are built by :mod:`dsfd.physics.forcing`.
 
 States are x1..x6 [K] (L1, L2, L3, louver, cavity air, DGU gap gas); parameters
 θ = (h_out, h_ca1, h_ca2, h_ca3, h_ca4, h_in, f, c, n) in the order of
-:data:`dsfd.config.panel.PARAMETER_NAMES`.
+:class:`dsfd.config.parameters.Param` (``theta[..., Param.F]``).
 """
 
 from __future__ import annotations
@@ -18,7 +18,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dsfd.config.panel import PARAMETER_NAMES, PanelConfig
+from dsfd.config.panel import PanelConfig
+from dsfd.config.parameters import N_PARAMS, Param
 from dsfd.physics.airflow import AirflowBoundary, AirflowGeometry
 from dsfd.physics.coupling import (
     NO_LOUVER_CAPACITY,
@@ -31,8 +32,6 @@ from dsfd.physics.coupling import (
 )
 from dsfd.physics.regimes import FlowSetup, flow_setup
 from dsfd.physics.rootfind import solve_fixed_point
-
-N_PARAMS = len(PARAMETER_NAMES)
 
 
 class Trajectory(NamedTuple):
@@ -103,7 +102,7 @@ def network_constants(cfg: PanelConfig) -> NetworkConstants:
         eps_l3_back=gl.interior_inner.emissivity_back,
         h_r23_factor=1.0 / (1.0 / gl.interior_outer.emissivity_back
                             + 1.0 / gl.interior_inner.emissivity_front - 1.0),
-        geom=AirflowGeometry.from_panel(cfg),
+        geom=AirflowGeometry.from_sections(cfg.openings, cfg.facade),
         dt=mo.step_s,
         cp_air=cp_a,
         coupling=mo.coupling,
@@ -138,15 +137,13 @@ class LumpedModel:
         return self.nc.capacity
 
     def default_theta(self) -> np.ndarray:
-        """Parameter defaults θ in the order of :data:`PARAMETER_NAMES`."""
-        p = self.cfg.parameters
-        return np.array([getattr(p, name).default for name in PARAMETER_NAMES])
+        """Parameter defaults θ (indexed by :class:`~dsfd.config.parameters.Param`)."""
+        return np.array(self.cfg.parameters.values("default"))
 
     def theta_bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """Lower and upper calibration bounds of θ."""
         p = self.cfg.parameters
-        return (np.array([getattr(p, k).lower for k in PARAMETER_NAMES]),
-                np.array([getattr(p, k).upper for k in PARAMETER_NAMES]))
+        return np.array(p.values("lower")), np.array(p.values("upper"))
 
     # ------------------------------------------------------------------ preparation
     def _flow_setup(self, regime: np.ndarray, or_: np.ndarray, inp: StepInputs,
@@ -156,8 +153,8 @@ class LumpedModel:
                               inp.cp_bottom, inp.cp_top)
         setup = flow_setup(regime.ravel(), or_.ravel(),
                            AirflowBoundary(*(np.ravel(v) for v in air)), self.geom,
-                           f=(theta[..., 6] + inp.cavity_loss).ravel(), c=theta[..., 7].ravel(),
-                           n=theta[..., 8].ravel())
+                           f=(theta[..., Param.F] + inp.cavity_loss).ravel(),
+                           c=theta[..., Param.C].ravel(), n=theta[..., Param.N].ravel())
         return setup.reshape(shape)
 
     def _batch(self, shape: tuple[int, ...], regime, or_, inputs: StepInputs, theta):

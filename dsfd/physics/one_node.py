@@ -65,6 +65,9 @@ class OneNodeFlow(NamedTuple):
     dpc_dpb: np.ndarray
 
 
+# long: 104 lines, 45 of them the docstring; the closures total() and result() carry the
+# per-call flow coefficients shared by the warm Newton steps and _bracketed_newton. Left
+# whole while issue 24 (perf) reworks this solver.
 def one_node_flows(
     p_b: np.ndarray,
     rho_b: np.ndarray,

@@ -127,6 +127,8 @@ def _glass_diffuse(
     return h1, h2, h3, system
 
 
+# long: 103 lines, 72 of them the docstring, which derives the balance the code solves; the
+# code itself is the three named steps below it (_beam_pass, _sky_and_ground, _diffuse_fluxes).
 def layer_absorption(
     *,
     beam: ArrayLike,
@@ -213,37 +215,75 @@ def layer_absorption(
     panes = glass_angular(normal[0], normal[1], normal[2], cos_aoi)
     g1, g2, g3 = (GlassAngular(*(p[i] for p in panes)) for i in range(3))
     h1, h2, h3, glass_system = _glass_diffuse(glass)  # type: ignore[arg-type]
-    dgu = dgu_beam(g2, g3)
-    slat = lv.beam(phi, profile)
     front = lv.diffuse(phi)
     back = lv.diffuse(-phi)
+    layers, gaps = _beam_pass(beam, g1, dgu_beam(g2, g3), lv.beam(phi, profile))
+    if diffuse_ground is None:  # outdoor diffuse transmitted by L1: uniform
+        gaps = gaps._replace(inward_1=h1.T * diffuse)
+    else:  # or as sky + ground "pseudo-beams"
+        layers, gaps = _sky_and_ground(layers, gaps, lv.sky_ground(phi), h1.T * diffuse,
+                                       h1.T * np.asarray(diffuse_ground, dtype=float))
+    F1, F2, F3, B1, B2, B3 = _diffuse_fluxes(glass_system, front, back, gaps)
+    s1 = layers.s1 + h1.A_f * diffuse + h1.A_b * B1
+    s4 = layers.s4 + front.alpha_d * F1 + back.alpha_d * B2
+    s2 = layers.s2 + h2.A_f * F2 + h2.A_b * B3
+    s3 = layers.s3 + h3.A_f * F3
+    transmitted = layers.transmitted_beam + h3.T * F3
+    reflected = g1.R_f * beam + h1.R_f * diffuse + h1.T * B1
+    out = np.broadcast_arrays(s1, s2, s3, s4, transmitted, layers.transmitted_beam, reflected)
+    return LayerSources(*(np.array(a) for a in out))
 
-    # Beam.
+
+class _Absorbed(NamedTuple):
+    """Short-wave absorbed per layer (node numbering) and the beam reaching the room."""
+
+    s1: np.ndarray
+    s2: np.ndarray
+    s3: np.ndarray
+    s4: np.ndarray
+    transmitted_beam: np.ndarray
+
+
+class _GapSources(NamedTuple):
+    """Diffuse sources of the gaps: inward into gaps 1, 2 (s+), outward into gaps 1, 2 (s-)."""
+
+    inward_1: np.ndarray | float
+    inward_2: np.ndarray
+    outward_1: np.ndarray
+    outward_2: np.ndarray
+
+
+def _beam_pass(beam: np.ndarray, g1: GlassAngular, dgu: DGUBeam,
+               slat: SlatBeam) -> tuple[_Absorbed, _GapSources]:
+    """The beam through L1, the louver and the DGU: what each layer absorbs and the
+    diffuse it leaves in the gaps (layer_absorption's Notes)."""
     b1 = g1.T * beam
     b2 = slat.tau_bb * b1
-    s1 = g1.A_f * beam
-    s4 = slat.alpha_b * b1
-    s2 = dgu.A_2 * b2
-    s3 = dgu.A_3 * b2
-    transmitted_beam = dgu.T * b2
-    inward_gap2 = slat.tau_bd * b1
-    outward_gap1 = slat.rho_bd * b1
-    outward_gap2 = dgu.R_f * b2
+    absorbed = _Absorbed(s1=g1.A_f * beam, s2=dgu.A_2 * b2, s3=dgu.A_3 * b2,
+                         s4=slat.alpha_b * b1, transmitted_beam=dgu.T * b2)
+    return absorbed, _GapSources(inward_1=0.0, inward_2=slat.tau_bd * b1,
+                                 outward_1=slat.rho_bd * b1, outward_2=dgu.R_f * b2)
 
-    # Outdoor diffuse transmitted by L1: uniform, or as sky + ground "pseudo-beams".
-    if diffuse_ground is None:
-        inward_gap1 = h1.T * diffuse
-    else:
-        ground = h1.T * np.asarray(diffuse_ground, dtype=float)
-        sky = h1.T * diffuse - ground
-        split = lv.sky_ground(phi)
-        inward_gap2 = inward_gap2 + split.tau_sky * sky + split.tau_gnd * ground
-        outward_gap1 = outward_gap1 + split.rho_sky * sky + split.rho_gnd * ground
-        s4 = s4 + split.alpha_sky * sky + split.alpha_gnd * ground
-        inward_gap1 = np.zeros_like(sky)
 
-    # Diffuse net radiation, unknowns (F1, F2, F3, B1, B2, B3); the louver rows:
-    #   F2 = tau^f_LV F1 + rho^b_LV B2 + s+_2,   B1 = tau^b_LV B2 + rho^f_LV F1 + s-_1.
+def _sky_and_ground(absorbed: _Absorbed, gaps: _GapSources, split: SlatSkyGround,
+                    through_l1: np.ndarray, ground: np.ndarray
+                    ) -> tuple[_Absorbed, _GapSources]:
+    """The outdoor diffuse that L1 transmits (``through_l1``, of which ``ground`` comes
+    from the ground) meets the louver with its sky and ground properties."""
+    sky = through_l1 - ground
+    absorbed = absorbed._replace(s4=absorbed.s4 + split.alpha_sky * sky
+                                 + split.alpha_gnd * ground)
+    return absorbed, _GapSources(
+        inward_1=np.zeros_like(sky),
+        inward_2=gaps.inward_2 + split.tau_sky * sky + split.tau_gnd * ground,
+        outward_1=gaps.outward_1 + split.rho_sky * sky + split.rho_gnd * ground,
+        outward_2=gaps.outward_2)
+
+
+def _diffuse_fluxes(glass_system: FloatArray, front: SlatDiffuse, back: SlatDiffuse,
+                    gaps: _GapSources) -> tuple[np.ndarray, ...]:
+    """Diffuse net radiation (F1, F2, F3, B1, B2, B3) of the 6 x 6 system with the louver
+    rows F2 = tau^f_LV F1 + rho^b_LV B2 + s+_2, B1 = tau^b_LV B2 + rho^f_LV F1 + s-_1."""
     shape = np.broadcast_shapes(front.tau_dd.shape, back.tau_dd.shape)
     system = np.empty((*shape, 6, 6))
     system[...] = glass_system
@@ -251,22 +291,12 @@ def layer_absorption(
     system[..., 1, 4] = -back.rho_dd
     system[..., 3, 0] = -front.rho_dd
     system[..., 3, 4] = -back.tau_dd
-    rhs_shape = np.broadcast_shapes(np.shape(inward_gap1), np.shape(inward_gap2),
-                                    np.shape(outward_gap1), np.shape(outward_gap2))
+    rhs_shape = np.broadcast_shapes(*(np.shape(v) for v in gaps))
     rhs = np.zeros((*rhs_shape, 6, 1))
-    rhs[..., 0, 0] = inward_gap1
-    rhs[..., 1, 0] = inward_gap2
-    rhs[..., 3, 0] = outward_gap1
-    rhs[..., 4, 0] = outward_gap2
+    rhs[..., 0, 0] = gaps.inward_1
+    rhs[..., 1, 0] = gaps.inward_2
+    rhs[..., 3, 0] = gaps.outward_1
+    rhs[..., 4, 0] = gaps.outward_2
     # The matrix depends on phi only: one inverse per slat angle, then a product per time
     # step, is cheaper than broadcasting an LU solve over every time step.
-    F1, F2, F3, B1, B2, B3 = np.moveaxis((np.linalg.inv(system) @ rhs)[..., 0], -1, 0)
-
-    s1 = s1 + h1.A_f * diffuse + h1.A_b * B1
-    s4 = s4 + front.alpha_d * F1 + back.alpha_d * B2
-    s2 = s2 + h2.A_f * F2 + h2.A_b * B3
-    s3 = s3 + h3.A_f * F3
-    transmitted = transmitted_beam + h3.T * F3
-    reflected = g1.R_f * beam + h1.R_f * diffuse + h1.T * B1
-    out = np.broadcast_arrays(s1, s2, s3, s4, transmitted, transmitted_beam, reflected)
-    return LayerSources(*(np.array(a) for a in out))
+    return tuple(np.moveaxis((np.linalg.inv(system) @ rhs)[..., 0], -1, 0))

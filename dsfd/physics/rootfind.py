@@ -92,21 +92,8 @@ def solve_fixed_point(
         rows = np.flatnonzero(~done)
         if rows.size == 0:
             break
-        br, fbr, cr, fcr, ar = b[rows], fb[rows], c[rows], fc[rows], a[rows]
-        # (no errstate context here: this loop runs every coupling evaluation; a zero
-        # denominator is masked, NaNs propagate silently and are caught by isfinite)
-        den = fbr - fcr
-        sec = br - np.divide(fbr * (br - cr), den, out=np.full(den.shape, np.nan),
-                             where=den != 0)
-        sec = np.where(np.isfinite(sec), sec, br + fbr)
-        bracketed = np.isfinite(ar)
-        # Before bracketing: move towards the sign of h, at most max_step.
-        search = np.where((sec - br) * fbr > 0, sec, br + fbr)
-        search = br + np.clip(search - br, -max_step, max_step)
-        # Inside a bracket: secant if between b and the midpoint, else bisect.
-        mid = 0.5 * (ar + br)
-        between = (sec - br) * (sec - mid) < 0
-        t_new = np.where(bracketed, np.where(between, sec, mid), search)
+        br, fbr, ar = b[rows], fb[rows], a[rows]
+        t_new = _next_points(br, fbr, c[rows], fc[rows], ar, max_step)
         f_new = phi(t_new, rows) - t_new
         evals[rows] += 1
         # The contrapoint keeps the sign opposite to the newest point.
@@ -125,6 +112,25 @@ def solve_fixed_point(
     with np.errstate(divide="ignore", invalid="ignore"):
         last = np.where(evals > 1, (fb - fc) / (b - c), s0)
     return FixedPoint(t=b, evaluations=evals, converged=converged, slope=last)
+
+
+def _next_points(b: np.ndarray, fb: np.ndarray, c: np.ndarray, fc: np.ndarray, a: np.ndarray,
+                 max_step: float) -> np.ndarray:
+    """Next iterate from the newest point b (h = fb), the previous one c (fc) and the
+    contrapoint a (NaN until the root is bracketed): before bracketing, the secant step if
+    it moves towards the sign of h, else b + h, at most ``max_step``; inside a bracket the
+    secant point if it lies between b and the midpoint, else the midpoint."""
+    # (no errstate context here: this runs every coupling evaluation; a zero denominator
+    # is masked, NaNs propagate silently and are caught by isfinite)
+    den = fb - fc
+    sec = b - np.divide(fb * (b - c), den, out=np.full(den.shape, np.nan), where=den != 0)
+    sec = np.where(np.isfinite(sec), sec, b + fb)
+    bracketed = np.isfinite(a)
+    search = np.where((sec - b) * fb > 0, sec, b + fb)
+    search = b + np.clip(search - b, -max_step, max_step)
+    mid = 0.5 * (a + b)
+    between = (sec - b) * (sec - mid) < 0
+    return np.where(bracketed, np.where(between, sec, mid), search)
 
 
 def _solve_one(phi: Callable[[np.ndarray, np.ndarray], np.ndarray], b: float, *, tol: float,

@@ -44,6 +44,7 @@ from typing import Literal
 import numpy as np
 
 from dsfd.config.panel import PanelConfig
+from dsfd.config.parameters import N_PARAMS
 from dsfd.control.objective import is_heating
 from dsfd.daemon.calibration import CalibrationStage
 from dsfd.daemon.clock import SimulatedClock, Slot
@@ -54,8 +55,9 @@ from dsfd.drivers.base import Command as DriverCommand
 from dsfd.drivers.simulated import SimulatedDriver
 from dsfd.estimation.params import ParameterSpace, full_vector
 from dsfd.estimation.state import CalibrationState
+from dsfd.physics.boundary import WeatherInputs
 from dsfd.physics.constants import T_ZERO
-from dsfd.physics.forcing import Forcing, WeatherInputs, facade_forcing
+from dsfd.physics.forcing import Forcing, facade_forcing
 from dsfd.physics.model import LumpedModel
 from dsfd.physics.solar import extraterrestrial_irradiance, solar_position
 from dsfd.sim.plant.actuators import Command
@@ -215,7 +217,7 @@ class ClosedLoopResult:
             "decide_ms_p99": float(np.percentile(d, 99)) if d.size else math.nan,
             "calibration_updates": self.calibration_updates,
             "by_condition": self.by_condition(*self.site),
-            "final_theta": [float(v) for v in self.final_theta[:9]],
+            "final_theta": [float(v) for v in self.final_theta[:N_PARAMS]],
             "wall_s": self.wall_s,
             "notes": list(self.notes),
         }

@@ -9,14 +9,21 @@ the series' notes, which callers print.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
 
-from dsfd.config.panel import PanelConfig
-from dsfd.physics.constants import T_ZERO
-from dsfd.physics.forcing import WeatherInputs
-from dsfd.weather import BUNDLED_WEATHER, WeatherSeries, bundled_weather, read_weather, resample
+from dsfd.config.panel import Facade, PanelConfig, Room
+from dsfd.physics.boundary import WeatherInputs, model_weather
+from dsfd.weather import (
+    BUNDLED_WEATHER,
+    CHANNELS,
+    WeatherSeries,
+    bundled_weather,
+    read_weather,
+    resample,
+)
 from dsfd.weather import shift_to_site as _shift
 
 #: Shift weather when station and site longitudes differ by more than this [deg].
@@ -58,28 +65,21 @@ def weather_inputs(series: WeatherSeries, cfg: PanelConfig, *, start_s: float, n
                    t_in_c: float | np.ndarray | None = None) -> WeatherInputs:
     """Model-step weather (midpoints, kelvin) for the panel, room from config unless given."""
     rs = resample(series, start_s=start_s, step_s=cfg.model.step_s, n_steps=n_steps)
-    room = cfg.room
-    t_in = np.broadcast_to(room.t_in_c if t_in_c is None else t_in_c, (n_steps,)) + T_ZERO
-    t_mrt = t_in if room.t_mrt_c is None else np.full(n_steps, room.t_mrt_c + T_ZERO)
-    pressure = np.where(np.isfinite(rs.pressure_pa), rs.pressure_pa, 101325.0)
-    return WeatherInputs(
-        time_s=rs.time_s,
-        t_out_k=rs.t_out_c + T_ZERO,
-        ghi_wm2=rs.ghi_wm2,
-        dni_wm2=rs.dni_wm2,
-        dhi_wm2=rs.dhi_wm2,
-        wind_speed_ms=np.nan_to_num(rs.wind_speed_ms, nan=0.0),
-        wind_dir_deg=np.nan_to_num(rs.wind_dir_deg, nan=cfg.facade.azimuth_deg),
-        pressure_pa=pressure,
-        t_in_k=np.asarray(t_in, float),
-        t_mrt_k=np.asarray(t_mrt, float),
-        t_dew_k=_dew_point_k(rs.t_out_c, rs.rh_pct),
-    )
+    return series_inputs(rs.time_s, {name: getattr(rs, name) for name in CHANNELS},
+                         room=cfg.room, facade=cfg.facade, t_in_c=t_in_c)
 
 
-def _dew_point_k(t_c: np.ndarray, rh_pct: np.ndarray) -> np.ndarray:
-    """Magnus-formula dew point [K] (Alduchov & Eskridge 1996 coefficients); NaN if no RH."""
-    a, b = 17.625, 243.04
-    with np.errstate(invalid="ignore", divide="ignore"):
-        gamma = np.log(np.clip(rh_pct, 1e-3, 100.0) / 100.0) + a * t_c / (b + t_c)
-        return b * gamma / (a - gamma) + T_ZERO
+def series_inputs(time_s: np.ndarray, channels: Mapping[str, np.ndarray], *, room: Room,
+                  facade: Facade, t_in_c: float | np.ndarray | None = None) -> WeatherInputs:
+    """:func:`~dsfd.physics.boundary.model_weather` of a weather series' channels.
+
+    ``channels`` maps the names of :data:`dsfd.weather.series.CHANNELS` to values at
+    ``time_s`` (a resampled series, or :func:`dsfd.weather.series.interpolate`). The readers
+    clip negative irradiance and keep wind speeds as recorded, so nothing more is clipped.
+    """
+    return model_weather(
+        time_s=time_s, t_out_c=channels["t_out_c"], ghi_wm2=channels["ghi_wm2"],
+        dni_wm2=channels["dni_wm2"], dhi_wm2=channels["dhi_wm2"],
+        wind_speed_ms=channels["wind_speed_ms"], wind_dir_deg=channels["wind_dir_deg"],
+        pressure_pa=channels["pressure_pa"], rh_pct=channels["rh_pct"], t_in_c=t_in_c,
+        room=room, facade_azimuth_deg=facade.azimuth_deg, clip_negative=False)

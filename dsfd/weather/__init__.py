@@ -16,19 +16,23 @@ from dsfd.weather.readers import (
     read_weather,
 )
 from dsfd.weather.series import (
+    CHANNELS,
     MAX_FILL_SAMPLES,
     WeatherSeries,
     fill_short_gaps,
+    interpolate,
     resample,
     shift_to_site,
 )
 
 __all__ = [
     "BUNDLED_WEATHER",
+    "CHANNELS",
     "MAX_FILL_SAMPLES",
     "WeatherSeries",
     "bundled_weather",
     "fill_short_gaps",
+    "interpolate",
     "read_epw",
     "read_kma_daily",
     "read_rmis",

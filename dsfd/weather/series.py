@@ -167,6 +167,22 @@ def _interp_wind_direction(
     return np.mod(np.degrees(np.arctan2(east, north)), 360.0)
 
 
+def interpolate(series: WeatherSeries, times_s: ArrayLike) -> dict[str, FloatArray]:
+    """The channels at instants ``times_s`` (name → values), held beyond the data ends.
+
+    Scalars are interpolated linearly in time, the wind direction on the circle
+    (speed-weighted u/v components); NaN where a neighbouring sample is NaN.
+    """
+    t_eval = np.clip(np.asarray(times_s, float), series.time_s[0], series.time_s[-1])
+    values = {
+        name: np.interp(t_eval, series.time_s, getattr(series, name))
+        for name in CHANNELS if name != "wind_dir_deg"
+    }
+    values["wind_dir_deg"] = _interp_wind_direction(
+        t_eval, series.time_s, series.wind_speed_ms, series.wind_dir_deg)
+    return values
+
+
 def resample(
     series: WeatherSeries, *, start_s: float, step_s: float, n_steps: int
 ) -> WeatherSeries:
@@ -210,13 +226,7 @@ def resample(
             f"which cover {utc_text(first)} to {utc_text(last)}"
         )
     midpoints = start_s + (np.arange(n_steps) + 0.5) * step_s
-    t_eval = np.clip(midpoints, series.time_s[0], series.time_s[-1])
-    values = {
-        name: np.interp(t_eval, series.time_s, getattr(series, name))
-        for name in CHANNELS if name != "wind_dir_deg"
-    }
-    values["wind_dir_deg"] = _interp_wind_direction(
-        t_eval, series.time_s, series.wind_speed_ms, series.wind_dir_deg)
+    values = interpolate(series, midpoints)
     note = f"resampled to {n_steps} step midpoints, step {step_s:g} s, from {utc_text(start_s)}"
     return dataclasses.replace(series, time_s=midpoints, notes=(*series.notes, note), **values)
 

@@ -108,6 +108,6 @@ def test_baseline_respects_missing_dampers():
 
 
 def test_louver_quantisation(suwon):
-    assert quantise_louver(31.0, suwon) == 36.0
-    assert quantise_louver(-100.0, suwon) == -90.0
-    assert quantise_louver(8.0, suwon) == 0.0
+    assert quantise_louver(31.0, suwon.louver) == 36.0
+    assert quantise_louver(-100.0, suwon.louver) == -90.0
+    assert quantise_louver(8.0, suwon.louver) == 0.0

@@ -11,6 +11,7 @@ import dataclasses
 import numpy as np
 
 from dsfd.config.panel import PanelConfig
+from dsfd.config.parameters import Param
 from dsfd.measured import MeasuredData
 from dsfd.physics.constants import T_ZERO
 from dsfd.physics.coupling import StepInputs
@@ -30,7 +31,7 @@ def with_calibration(cfg: PanelConfig, **changes) -> PanelConfig:
 
 def true_theta(cfg: PanelConfig) -> np.ndarray:
     theta = LumpedModel(cfg).default_theta() * TRUE_FACTORS
-    theta[8] = TRUE_N
+    theta[Param.N] = TRUE_N
     return theta
 
 

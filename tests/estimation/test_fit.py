@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from dsfd.config.panel import PARAMETER_NAMES
+from dsfd.config.parameters import N_PARAMS, Param
 from dsfd.estimation.calibration import offline_fit
 from dsfd.estimation.params import ParameterSpace
 from dsfd.estimation.stepdata import model_config, step_data
@@ -35,19 +36,19 @@ def clean_fit(suwon, record):
 def test_identifiable_parameters_are_recovered_within_5_percent(suwon, record, clean_fit):
     _, theta = record
     state, fit = clean_fit
-    assert fit.free[:9].all()
-    err = np.abs(state.theta[:9] / theta - 1.0)
+    assert fit.free[:N_PARAMS].all()
+    err = np.abs(state.theta[:N_PARAMS] / theta - 1.0)
     worst = PARAMETER_NAMES[int(np.argmax(err))]
     assert err.max() < 0.05, f"{worst}: {err.max():.1%}"
     # the heat-flux offsets stay near zero on data the model can represent
-    assert np.all(np.abs(state.theta[9:]) < 3.0)
+    assert np.all(np.abs(state.theta[N_PARAMS:]) < 3.0)
 
 
 def test_standard_errors_are_positive_and_small(suwon, clean_fit):
     state, _ = clean_fit
     se = state.std_error(ParameterSpace.from_panel(suwon))
-    assert np.all(se[:9] > 0)
-    assert np.all(se[:9] / state.theta[:9] < 0.05)
+    assert np.all(se[:N_PARAMS] > 0)
+    assert np.all(se[:N_PARAMS] / state.theta[:N_PARAMS] < 0.05)
 
 
 def _with(data: MeasuredData, column: str, row: int, delta: float) -> MeasuredData:
@@ -69,16 +70,17 @@ def test_one_outlier_moves_no_estimate_by_more_than_its_standard_error(suwon, re
     state, _ = offline_fit(model, steps)
     ref, _ = clean_fit
     se = ref.std_error(ParameterSpace.from_panel(cfg))
-    moved = np.abs(state.theta - ref.theta)[:9]
-    assert np.all(moved <= se[:9]), dict(zip(PARAMETER_NAMES, np.round(moved / se[:9], 2),
-                                             strict=True))
+    moved = np.abs(state.theta - ref.theta)[:N_PARAMS]
+    assert np.all(moved <= se[:N_PARAMS]), dict(zip(PARAMETER_NAMES,
+                                                    np.round(moved / se[:N_PARAMS], 2),
+                                                    strict=True))
 
 
 def test_estimates_stay_inside_the_bounds(suwon):
     """Data made with h_out and f beyond the panel's bounds: the fit stops at the bound."""
     theta = true_theta(suwon)
-    theta[0] = 60.0  # h_out upper bound 40
-    theta[6] = 3.0   # f lower bound 5
+    theta[Param.H_OUT] = 60.0  # upper bound 40
+    theta[Param.F] = 3.0  # lower bound 5
     data, _ = lumped_record(suwon, theta, step_s=300.0, hours=4.0, seed=2,
                             regimes=(1, 3, 10))
     steps = step_data(suwon, data)
@@ -86,9 +88,10 @@ def test_estimates_stay_inside_the_bounds(suwon):
     space = ParameterSpace.from_panel(suwon)
     state, fit = offline_fit(model, steps, max_nfev=15)
     assert np.all(state.theta >= space.lower) and np.all(state.theta <= space.upper)
-    assert state.theta[0] == pytest.approx(40.0, rel=0.02)
-    assert not fit.free[7] and not fit.free[8]  # no regime 5-8 in the data: c, n held
-    assert state.theta[7] == space.default[7] and state.theta[8] == space.default[8]
+    assert state.theta[Param.H_OUT] == pytest.approx(40.0, rel=0.02)
+    c_n = [Param.C, Param.N]
+    assert not fit.free[c_n].any()  # no regime 5-8 in the data: c, n held
+    assert np.array_equal(state.theta[c_n], space.default[c_n])
 
 
 def test_the_outlier_matters_without_robust_loss_and_spike_filter(suwon, record, clean_fit):

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from dsfd.config import load_panel
+from dsfd.config.parameters import N_PARAMS, Param
 from dsfd.estimation.calibration import OnlineCalibrator, window_start
 from dsfd.estimation.observer import fill_state, observe, spike_mask
 from dsfd.estimation.params import FIT_NAMES, ParameterSpace
@@ -82,7 +83,8 @@ def test_resumed_state_continues_the_calibration(suwon):
     b = resumed.update(rest, track.x_hat[0, 24:], track.x_pred[0, 24:])
     assert np.allclose(a.state.theta, b.state.theta)
     # two windows bring the well-excited conductances close to the truth
-    err = np.abs(b.state.theta[[0, 1, 3]] / theta[[0, 1, 3]] - 1)
+    well_excited = [Param.H_OUT, Param.H_CA1, Param.H_CA3]
+    err = np.abs(b.state.theta[well_excited] / theta[well_excited] - 1)
     assert err.max() < 0.1
 
 
@@ -92,7 +94,7 @@ def test_offsets_follow_a_sensor_bias(suwon):
     track = observe(model, biased, model.default_theta()[None])
     cal = OnlineCalibrator(model)
     cal.update(biased, track.x_hat[0], track.x_pred[0])
-    q1 = cal.theta[FIT_NAMES.index("q_x1")]
+    q1 = cal.theta[Param.Q_X1]
     assert q1 > 5.0  # W/m2: the exterior pane reads warm, so it gets heat
     for k in range(20, 40):
         cal.track(biased, k, track.x_hat[0, k], biased.y_k[k + 1])
@@ -140,7 +142,7 @@ def test_inner_pane_offsets_average_out_white_sensor_noise(suwon):
         q = []
         for k in range(steps.n_steps):
             cal.track(steps, k, track.x_hat[0, k], steps.y_k[k + 1])
-            q.append(cal.theta[-4:].copy())
+            q.append(cal.theta[N_PARAMS:].copy())
         spread[tau[1]] = np.std(q, axis=0)  # W/m2, per node x1..x4
     assert suwon.calibration.innovation_smoothing_s == (300.0, 1800.0, 1800.0, 300.0)
     fast, slow = spread[300.0], spread[1800.0]

@@ -53,10 +53,9 @@ def test_replay_reports_the_difference_of_the_mean_absolute_errors(suwon):
     cfg = with_calibration(suwon, update_interval_s=1800.0, max_nfev=4)
     data, _ = lumped_record(cfg, true_theta(cfg), step_s=300.0, hours=4.0, seed=5)
     steps = step_data(cfg, data)
-    out = replay_scores(cfg, steps, offline_theta=true_theta(cfg), horizons=(1,))
+    h1 = replay_scores(cfg, steps, offline_theta=true_theta(cfg), horizons=(1,)).horizons[1]
     for other in ("offline", "uncalibrated", "persistence"):
         for s in STATES:
-            key = f"online_vs_{other}.h1.{s}_mae_diff"
-            assert out[f"{key}_c"] == pytest.approx(
-                out[f"online.h1.{s}_mae_c"] - out[f"{other}.h1.{s}_mae_c"], abs=1e-12)
-            assert out[f"{key}_se_c"] >= 0.0
+            diff, se = h1.paired[other][s]
+            assert diff == pytest.approx(h1.mae_c["online"][s] - h1.mae_c[other][s], abs=1e-12)
+            assert se >= 0.0

@@ -9,13 +9,12 @@ import pytest
 from scipy.signal import savgol_coeffs
 
 from dsfd.config.calibration import Calibration
+from dsfd.config.parameters import Param
 from dsfd.estimation.calibration import offline_fit
 from dsfd.estimation.objective import rollout_starts, savgol_centre_weights, smoothed_starts
 from dsfd.estimation.stepdata import model_config, step_data
 from dsfd.physics.model import LumpedModel
 from tests.estimation.synthetic import lumped_record, true_theta, with_calibration
-
-H_IN = 5
 
 
 @pytest.mark.parametrize("width", [3, 5, 9, 21])
@@ -94,6 +93,7 @@ def test_raw_start_kept_at_control_changes_gaps_and_edges(noisy):
     assert np.all(out[~keep & near_gap, 0] != raw[~keep & near_gap, 0])
 
 
+@pytest.mark.slow  # 12 off-line fits (six records, raw and smoothed starts): ~35 s
 def test_smoothed_starts_remove_the_bias_of_h_in(suwon):
     """On lumped-model data (known θ, σ = 0.2 K, 1-minute samples) the fit from raw readings
     overestimates h_in — a noisy start is fitted best by a model that forgets it fast — and
@@ -111,7 +111,7 @@ def test_smoothed_starts_remove_the_bias_of_h_in(suwon):
         for span in bias:
             cal = dataclasses.replace(suwon.calibration, start_smoothing_s=span)
             state, _ = offline_fit(model, steps, cal)
-            bias[span].append(state.theta[H_IN] / theta[H_IN] - 1.0)
+            bias[span].append(state.theta[Param.H_IN] / theta[Param.H_IN] - 1.0)
     smooth, raw = np.array(bias[480.0]), np.array(bias[0.0])
     assert np.mean(np.abs(smooth)) < 0.05, smooth
     assert np.sum(raw > smooth) >= 5, (raw, smooth)  # a record may show no bias at all

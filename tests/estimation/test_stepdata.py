@@ -29,14 +29,14 @@ def _table(n: int = 6, step_s: float = 60.0, **extra) -> MeasuredData:
 
 def test_step_k_takes_the_weather_of_row_k_plus_1_at_its_midpoint(suwon):
     data = _table()
-    w = weather_of_steps(suwon, data)
+    w = weather_of_steps(data, room=suwon.room, facade=suwon.facade)
     assert np.allclose(w.t_out_k - T_ZERO, np.arange(1, 7))
     assert np.allclose(w.time_s, data.time_s[:-1] + 30.0)
 
 
 def test_room_temperature_of_a_step_is_the_mean_of_its_rows(suwon):
     data = _table(t_room_c=np.array([20.0, 22.0, 22.0, 22.0, 22.0, 22.0, 24.0]))
-    w = weather_of_steps(suwon, data)
+    w = weather_of_steps(data, room=suwon.room, facade=suwon.facade)
     assert w.t_in_k[0] - T_ZERO == pytest.approx(21.0)
     assert w.t_in_k[-1] - T_ZERO == pytest.approx(23.0)
 
@@ -76,7 +76,7 @@ def test_a_gap_in_the_record_invalidates_the_step(suwon):
 
 def test_facade_plane_irradiance_replaces_the_transposition(suwon):
     data = _table()
-    w = weather_of_steps(suwon, data)
+    w = weather_of_steps(data, room=suwon.room, facade=suwon.facade)
     noon = np.full(1, 1.6409e9 + 3.5 * 3600)  # ~12:30 local solar time in Suwon
     base = w._replace(time_s=noon, **{k: getattr(w, k)[:1] for k in w._fields
                                      if k not in ("time_s", "poa_global_wm2",
@@ -96,7 +96,7 @@ def test_facade_plane_irradiance_with_the_sun_behind_the_facade_is_diffuse(suwon
     north = dataclasses.replace(suwon, facade=dataclasses.replace(suwon.facade,
                                                                   azimuth_deg=0.0))
     data = _table()
-    w = weather_of_steps(north, data)
+    w = weather_of_steps(data, room=north.room, facade=north.facade)
     noon = np.full(1, 1.6409e9 + 3.5 * 3600)
     base = w._replace(time_s=noon, **{k: getattr(w, k)[:1] for k in w._fields
                                      if k not in ("time_s", "poa_global_wm2",

@@ -18,15 +18,13 @@ def record(suwon):
 
 def test_reference_equal_to_the_readings_scores_like_the_readings(suwon, record):
     steps = step_data(suwon, record)
-    out = replay_scores(suwon, steps, horizons=(1,), online=False,
-                        reference_v_ms=record.get("v_cav_ms"))
-    regimes = [k.rsplit("_", 1)[1] for k in out if k.startswith("sensor.velocity_mae")]
-    assert sorted(regimes) == ["1", "5"]
-    for r in regimes:
-        assert out[f"sensor.velocity_mae_cms.regime_{r}"] == 0.0
+    scores = replay_scores(suwon, steps, horizons=(1,), online=False,
+                           reference_v_ms=record.get("v_cav_ms"))
+    assert sorted(scores.velocity) == [1, 5]
+    for v in scores.velocity.values():
+        assert v.sensor_mae_cms == 0.0
         for m in ("uncalibrated", "persistence"):
-            assert out[f"{m}.velocity_true_mae_cms.regime_{r}"] == pytest.approx(
-                out[f"{m}.velocity_mae_cms.regime_{r}"])
+            assert v.true_mae_cms[m] == pytest.approx(v.mae_cms[m])
 
 
 def test_the_sensor_error_is_the_reading_minus_the_reference(suwon, record):
@@ -34,6 +32,7 @@ def test_the_sensor_error_is_the_reading_minus_the_reference(suwon, record):
     v = record.get("v_cav_ms")
     offset = 0.02  # a reference 2 cm/s below every reading
     out = replay_scores(suwon, steps, horizons=(1,), online=False, reference_v_ms=v - offset)
-    assert out["sensor.velocity_mae_cms.regime_1"] == pytest.approx(2.0)
-    without = replay_scores(suwon, steps, horizons=(1,), online=False)
+    assert out.velocity[1].sensor_mae_cms == pytest.approx(2.0)
+    assert out.flat()["sensor.velocity_mae_cms.regime_1"] == out.velocity[1].sensor_mae_cms
+    without = replay_scores(suwon, steps, horizons=(1,), online=False).flat()
     assert not any(k.startswith("sensor.") or "velocity_true" in k for k in without)

@@ -27,7 +27,7 @@ from dsfd.physics.regimes import regime_flows
 
 @pytest.fixture(scope="module")
 def geom(suwon):
-    return AirflowGeometry.from_panel(suwon)
+    return AirflowGeometry.from_sections(suwon.openings, suwon.facade)
 
 
 def _bnd(t_out_c, t_in_c, wind, cp_b, cp_t, n=None):

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
+from dsfd.config.parameters import Param
 from dsfd.physics.cavity_profile import outlet_excess_ratio
 from dsfd.physics.constants import T_ZERO
 from dsfd.physics.forcing import FacadeOptics, step_inputs
@@ -83,7 +84,8 @@ def test_room_gets_the_heat_the_flow_takes_from_the_cavity(suwon):
         theta = model.default_theta()
         nc = model.nc
         g_flow = nc.cp_air * m_in / nc.geom.facade_area_m2
-        a = (theta[1] + nc.slat_area_ratio * theta[2] + theta[3]) / g_flow
+        a = (theta[Param.H_CA1] + nc.slat_area_ratio * theta[Param.H_CA2]
+             + theta[Param.H_CA3]) / g_flow
         k = 1.0 if name == "well_mixed" else float(outlet_excess_ratio(a))
         excess = float(res.x_mean[0, 4] - inp.t_in_k)
         q[name] = float(res.q_air_w[0])

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from dsfd.config import load_panel
+from dsfd.config.parameters import Param
 from dsfd.physics.airflow import louver_flow_loss
 from dsfd.physics.constants import T_ZERO
 from dsfd.physics.forcing import FacadeOptics, Forcing, OpticalLoads, step_inputs
@@ -62,7 +63,7 @@ def test_the_loss_is_the_form_loss_it_adds_to(suwon):
     off_cfg = _with_loss(suwon, False)
     for j, k in enumerate(k_l):
         th = theta.copy()
-        th[6] += k
+        th[Param.F] += k
         assert _speeds(off_cfg, 1, th)[j] == pytest.approx(on[j], rel=1e-9)
     assert k_l[0] > 1.0 and k_l[-1] == pytest.approx(0.0, abs=1e-12)
 

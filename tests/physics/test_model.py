@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from dsfd.config import load_panel
+from dsfd.config.parameters import Param
 from dsfd.physics.constants import T_ZERO
 from dsfd.physics.forcing import FacadeOptics, Forcing, OpticalLoads, step_inputs
 from dsfd.physics.model import LumpedModel
@@ -94,7 +95,7 @@ def test_winter_sun_magnitudes_of_physics_8_5(model, optics):
     inp = step_inputs(f, optics.loads(f, angles))
     inp = inp._replace(**{k: getattr(inp, k)[:, 0] for k in OpticalLoads._fields})
     th = model.default_theta().copy()
-    th[6] = 85.0
+    th[Param.F] = 85.0
     x1 = model.steady_state(np.ones(4, int), 1.0, inp, th)
     v = model.step(x1, np.ones(4, int), 1.0, inp, th).v_cav_ms
     assert 0.11 / 1.5 <= v.min() and v.max() <= 0.16 * 1.5

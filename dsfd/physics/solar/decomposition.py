@@ -11,6 +11,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
+from dsfd.physics.constants import STANDARD_PRESSURE_PA
 from dsfd.physics.solar.position import (
     FloatArray,
     _as_float,
@@ -163,7 +164,7 @@ def disc(
     zenith_deg: ArrayLike,
     unix_s: ArrayLike,
     *,
-    pressure_pa: ArrayLike = 101325.0,
+    pressure_pa: ArrayLike = STANDARD_PRESSURE_PA,
     min_cos_zenith: float = 0.065,
     max_zenith_deg: float = 87.0,
     max_airmass: float = 12.0,
@@ -207,7 +208,8 @@ def disc(
     ghi_a, zen = _as_float(ghi), _as_float(zenith_deg)
     i0 = extraterrestrial_irradiance(unix_s, solar_constant=DISC_SOLAR_CONSTANT)
     kt = clearness_index(ghi_a, zen, i0, min_cos_zenith=min_cos_zenith, max_clearness_index=1.0)
-    am = np.minimum(_kasten1966_airmass(zen) * _as_float(pressure_pa) / 101325.0, max_airmass)
+    am = np.minimum(_kasten1966_airmass(zen) * _as_float(pressure_pa) / STANDARD_PRESSURE_PA,
+                    max_airmass)
     cloudy = kt <= 0.6
     a = np.where(cloudy, 0.512 + kt * (-1.56 + kt * (2.286 - 2.222 * kt)),
                  -5.743 + kt * (21.77 + kt * (-27.49 + 11.56 * kt)))
@@ -243,7 +245,7 @@ def dirint(
     zenith_deg: ArrayLike,
     unix_s: ArrayLike,
     *,
-    pressure_pa: ArrayLike = 101325.0,
+    pressure_pa: ArrayLike = STANDARD_PRESSURE_PA,
     use_delta_kt_prime: bool = True,
     min_cos_zenith: float = 0.065,
     max_zenith_deg: float = 87.0,

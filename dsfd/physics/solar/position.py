@@ -12,6 +12,8 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from dsfd.physics.constants import STANDARD_PRESSURE_PA
+
 FloatArray = NDArray[np.float64]
 
 #: Solar constant of the Spencer extraterrestrial irradiance [W/m2] (pvlib default).
@@ -83,6 +85,28 @@ def solar_position(
     """
     t = _as_float(unix_s)
     lat = np.radians(_as_float(latitude_deg))
+    decl, eot_min = _declination_and_equation_of_time(t)
+    minutes_utc = np.mod(t, 86400.0) / 60.0
+    true_solar_min = np.mod(minutes_utc + eot_min + 4.0 * _as_float(longitude_deg), 1440.0)
+    hour_angle_deg = true_solar_min / 4.0 - 180.0
+    omega = np.radians(hour_angle_deg)
+
+    cos_zen = np.sin(lat) * np.sin(decl) + np.cos(lat) * np.cos(decl) * np.cos(omega)
+    zenith = np.degrees(np.arccos(np.clip(cos_zen, -1.0, 1.0)))
+    azimuth = np.mod(
+        180.0 + np.degrees(np.arctan2(
+            np.sin(omega) * np.cos(decl),
+            np.cos(omega) * np.cos(decl) * np.sin(lat) - np.sin(decl) * np.cos(lat),
+        )),
+        360.0,
+    )
+    return SolarPosition(zenith, azimuth, 90.0 - zenith, np.degrees(decl), eot_min,
+                         hour_angle_deg)
+
+
+def _declination_and_equation_of_time(t: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Solar declination [rad] and equation of time [min] at UTC unix times ``t`` [s]:
+    the orbital part of :func:`solar_position` (its Notes)."""
     jc = (t - _J2000_UNIX_S) / 86400.0 / 36525.0
     mean_lon = np.radians(np.mod(280.46646 + jc * (36000.76983 + 0.0003032 * jc), 360.0))
     anomaly = np.radians(357.52911 + jc * (35999.05029 - 0.0001537 * jc))
@@ -107,26 +131,12 @@ def solar_position(
         - 0.5 * y**2 * np.sin(4 * mean_lon)
         - 1.25 * ecc**2 * np.sin(2 * anomaly)
     )
-    minutes_utc = np.mod(t, 86400.0) / 60.0
-    true_solar_min = np.mod(minutes_utc + eot_min + 4.0 * _as_float(longitude_deg), 1440.0)
-    hour_angle_deg = true_solar_min / 4.0 - 180.0
-    omega = np.radians(hour_angle_deg)
-
-    cos_zen = np.sin(lat) * np.sin(decl) + np.cos(lat) * np.cos(decl) * np.cos(omega)
-    zenith = np.degrees(np.arccos(np.clip(cos_zen, -1.0, 1.0)))
-    azimuth = np.mod(
-        180.0 + np.degrees(np.arctan2(
-            np.sin(omega) * np.cos(decl),
-            np.cos(omega) * np.cos(decl) * np.sin(lat) - np.sin(decl) * np.cos(lat),
-        )),
-        360.0,
-    )
-    return SolarPosition(zenith, azimuth, 90.0 - zenith, np.degrees(decl), eot_min,
-                         hour_angle_deg)
+    return decl, eot_min
 
 
 def apparent_elevation(
-    elevation_deg: ArrayLike, *, pressure_pa: ArrayLike = 101325.0, temp_c: ArrayLike = 12.0
+    elevation_deg: ArrayLike, *, pressure_pa: ArrayLike = STANDARD_PRESSURE_PA,
+    temp_c: ArrayLike = 12.0,
 ) -> FloatArray:
     """Sun elevation corrected for atmospheric refraction.
 

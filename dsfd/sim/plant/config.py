@@ -23,9 +23,8 @@ import numpy as np
 
 from dsfd.config.loader import setting
 from dsfd.config.panel import PanelConfig
+from dsfd.config.parameters import CONVECTIVE_NAMES
 
-#: Names of the six convective multipliers, in the order of the lumped θ (docs/model.md#parameters).
-H_NAMES: tuple[str, ...] = ("h_out", "h_ca1", "h_ca2", "h_ca3", "h_ca4", "h_in")
 SECONDS_PER_DAY = 86400.0
 
 
@@ -117,7 +116,7 @@ class PlantOptions:
     drift_reflectance_per_day: float = setting(
         0.0, doc="Change of the louver solar reflectance (both faces) per day", unit="1/d")
     drift_h_name: str = setting(
-        "h_ca2", doc="Which convective multiplier drifts (one of H_NAMES)")
+        "h_ca2", doc="Which convective multiplier drifts (one of CONVECTIVE_NAMES)")
     drift_h_per_day: float = setting(
         0.0, doc="Relative change of that multiplier per day", unit="1/d")
     # --- integration --------------------------------------------------------------------
@@ -132,9 +131,9 @@ class PlantOptions:
                 raise ValueError(f"PlantOptions.{f.name} = {value!r}; choose one of {choices}")
         if not 1 <= self.n_segments <= 200:
             raise ValueError(f"PlantOptions.n_segments = {self.n_segments}; use 1..200")
-        if self.drift_h_name not in H_NAMES:
+        if self.drift_h_name not in CONVECTIVE_NAMES:
             raise ValueError(f"PlantOptions.drift_h_name = {self.drift_h_name!r}; "
-                             f"choose one of {H_NAMES}")
+                             f"choose one of {CONVECTIVE_NAMES}")
 
     @classmethod
     def lumped_equivalent(cls, **overrides: object) -> PlantOptions:
@@ -222,8 +221,8 @@ class TrueParameters:
 
     def constant_h(self, cfg: PanelConfig) -> np.ndarray:
         """Constant h's m × config default [W/(m2 K)] for ``convection='constant'``."""
-        p = cfg.parameters
-        return np.array([getattr(p, k).default for k in H_NAMES]) * np.array(self.h_multipliers)
+        defaults = cfg.parameters.values("default", CONVECTIVE_NAMES)
+        return np.array(defaults) * np.array(self.h_multipliers)
 
     def lumped_theta(self, cfg: PanelConfig) -> np.ndarray:
         """The lumped θ that describes this plant exactly in the lumped-equivalent configuration
@@ -242,6 +241,6 @@ def drift_factors(options: PlantOptions, elapsed_s: float) -> tuple[float, np.nd
     days = elapsed_s / SECONDS_PER_DAY
     factors = np.ones(6)
     if options.drift_h_per_day:
-        j = H_NAMES.index(options.drift_h_name)
+        j = CONVECTIVE_NAMES.index(options.drift_h_name)
         factors[j] = max(0.1, 1.0 + options.drift_h_per_day * days)
     return options.drift_reflectance_per_day * days, factors

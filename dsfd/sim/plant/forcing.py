@@ -30,10 +30,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dsfd.config.panel import PanelConfig
+from dsfd.config.panel import Facade, Louver, PanelConfig, Site
 from dsfd.physics.airflow import AirflowGeometry
-from dsfd.physics.constants import T_ZERO
-from dsfd.physics.forcing import FacadeOptics, WeatherInputs, facade_forcing, local_wind_speed
+from dsfd.physics.boundary import WeatherInputs, sky_dew_point_k
+from dsfd.physics.forcing import FacadeOptics, facade_forcing, local_wind_speed
 from dsfd.physics.longwave import (
     cavity_exchange_matrix,
     exterior_radiant_temperature,
@@ -49,9 +49,8 @@ from dsfd.physics.solar import (
     solar_position,
 )
 from dsfd.sim.plant.config import PlantOptions, drift_factors
-from dsfd.sim.replay import _dew_point_k, weather_inputs
-from dsfd.weather import WeatherSeries
-from dsfd.weather.series import _interp_wind_direction
+from dsfd.sim.replay import series_inputs, weather_inputs
+from dsfd.weather import WeatherSeries, interpolate
 
 #: Scalar boundary fields, in the column order of :attr:`StepTable.a`.
 FIELDS = ("t_out_k", "t_in_k", "t_mrt_k", "t_rad_out_k", "p_atm_pa", "wind_ms", "cp_bottom",
@@ -101,44 +100,21 @@ def weather_at(series: WeatherSeries, cfg: PanelConfig, times_s: np.ndarray,
                t_in_c: np.ndarray) -> WeatherInputs:
     """Weather interpolated linearly at instants ``times_s`` (held beyond the data ends).
 
-    Wind direction is interpolated on the circle (speed-weighted components), missing wind
-    becomes calm, missing pressure 101325 Pa (as :func:`dsfd.sim.replay.weather_inputs`).
+    Wind direction is interpolated on the circle (speed-weighted components); what is
+    missing gets the defaults of :func:`dsfd.physics.boundary.model_weather`, as in
+    :func:`dsfd.sim.replay.weather_inputs`.
     """
-    t = np.clip(np.asarray(times_s, float), series.time_s[0], series.time_s[-1])
-
-    def lin(name: str) -> np.ndarray:
-        return np.interp(t, series.time_s, getattr(series, name))
-
-    t_in = np.asarray(t_in_c, float) + T_ZERO
-    room = cfg.room
-    t_mrt = t_in if room.t_mrt_c is None else np.full_like(t_in, room.t_mrt_c + T_ZERO)
-    speed = lin("wind_speed_ms")
-    direction = _interp_wind_direction(t, series.time_s, series.wind_speed_ms,
-                                       series.wind_dir_deg)
-    pressure = lin("pressure_pa")
-    t_out_c = lin("t_out_c")
-    return WeatherInputs(
-        time_s=np.asarray(times_s, float),
-        t_out_k=t_out_c + T_ZERO,
-        ghi_wm2=lin("ghi_wm2"),
-        dni_wm2=lin("dni_wm2"),
-        dhi_wm2=lin("dhi_wm2"),
-        wind_speed_ms=np.nan_to_num(speed, nan=0.0),
-        wind_dir_deg=np.nan_to_num(direction, nan=cfg.facade.azimuth_deg),
-        pressure_pa=np.where(np.isfinite(pressure), pressure, 101325.0),
-        t_in_k=t_in,
-        t_mrt_k=t_mrt,
-        t_dew_k=_dew_point_k(t_out_c, lin("rh_pct")),
-    )
+    return series_inputs(np.asarray(times_s, float), interpolate(series, times_s),
+                         room=cfg.room, facade=cfg.facade, t_in_c=np.asarray(t_in_c, float))
 
 
-def station_ghi(cfg: PanelConfig, w: WeatherInputs) -> np.ndarray:
+def station_ghi(site: Site, w: WeatherInputs) -> np.ndarray:
     """Global horizontal irradiance of the plant's own sky [W/m2], what its pyranometer sees.
 
     Parameters
     ----------
-    cfg : PanelConfig
-        The panel (its site gives the sun).
+    site : Site
+        The panel's site (where the sun is).
     w : WeatherInputs
         Weather at the plant (:func:`weather_at`).
 
@@ -156,17 +132,16 @@ def station_ghi(cfg: PanelConfig, w: WeatherInputs) -> np.ndarray:
     about −9 % and −20 %; within 1.5 % from 9 to 12 h), so a station fed that channel would
     tell the controller of a weaker sun than the one heating the plant.
     """
-    sun = solar_position(w.time_s, cfg.site.latitude_deg, cfg.site.longitude_deg)
+    sun = solar_position(w.time_s, site.latitude_deg, site.longitude_deg)
     # a horizontal plane's angle of incidence is the zenith angle
     closure = beam_on_surface(w.dni_wm2, sun.zenith_deg) + np.asarray(w.dhi_wm2, float)
     ghi = np.where(np.isfinite(closure), closure, np.asarray(w.ghi_wm2, float))
     return np.clip(np.nan_to_num(ghi), 0.0, None)
 
 
-def fine_louver(cfg: PanelConfig, options: PlantOptions, d_rho: float = 0.0,
+def fine_louver(lv: Louver | None, options: PlantOptions, d_rho: float = 0.0,
                 band: str = "solar") -> LouverOptics | None:
     """The louver with M = ``options.optics_segments`` and the slat thickness correction."""
-    lv = cfg.louver
     if lv is None:
         return None
     base = LouverOptics.from_config(lv, band=band, segments=options.optics_segments,
@@ -187,7 +162,7 @@ def lw_exchange_table(cfg: PanelConfig, options: PlantOptions,
     phi = np.radians(np.asarray(phis_deg, float))
     if options.radiation == "three_layer" or cfg.louver is None:
         return FacadeOptics(cfg).lw_exchange(phi)
-    ir = fine_louver(cfg, options).infrared(phi)
+    ir = fine_louver(cfg.louver, options).infrared(phi)
     gl = cfg.glazing
     r = cavity_exchange_matrix(gl.exterior.emissivity_back, ir.eps_L, ir.tau_L,
                                gl.interior_outer.emissivity_front)
@@ -195,16 +170,15 @@ def lw_exchange_table(cfg: PanelConfig, options: PlantOptions,
 
 
 def _sky(cfg: PanelConfig, options: PlantOptions, w: WeatherInputs) -> np.ndarray:
-    dew = np.where(np.isfinite(w.t_dew_k), w.t_dew_k, w.t_out_k - 5.0)
     if "clark_allen" in (options.sky_model, cfg.model.sky_model):
-        t_sky = sky_temperature_clark_allen(w.t_out_k, dew, 0.0)
+        t_sky = sky_temperature_clark_allen(w.t_out_k, sky_dew_point_k(w), 0.0)
     else:
         t_sky = sky_temperature_swinbank(w.t_out_k)
     return exterior_radiant_temperature(w.t_out_k, t_sky)
 
 
-def _windward(cfg: PanelConfig, w: WeatherInputs) -> np.ndarray:
-    rel = np.asarray(w.wind_dir_deg, float) - cfg.facade.azimuth_deg
+def _windward(facade: Facade, w: WeatherInputs) -> np.ndarray:
+    rel = np.asarray(w.wind_dir_deg, float) - facade.azimuth_deg
     return np.abs((rel + 180.0) % 360.0 - 180.0) <= WINDWARD_LIMIT_DEG
 
 
@@ -218,7 +192,7 @@ def _knots_lumped(cfg: PanelConfig, options: PlantOptions, w: WeatherInputs,
                         f.cp_bottom, f.cp_top], axis=-1)
     sources = np.concatenate([loads.sources, loads.q_trans_wm2[..., None],
                               loads.q_da_w[..., None] / optics.area], axis=-1)
-    return _Knots(scalars, np.moveaxis(sources, 0, 1), _windward(cfg, w),
+    return _Knots(scalars, np.moveaxis(sources, 0, 1), _windward(cfg.facade, w),
                   f.beam_wm2 + f.diffuse_wm2)
 
 
@@ -256,13 +230,13 @@ def _knots_fine(cfg: PanelConfig, options: PlantOptions, w: WeatherInputs,
     q_da = optics.loads(facade_forcing(cfg, w), phis_rad).q_da_w / optics.area
     sources = np.stack([np.broadcast_to(s, (m, n)) for s in (sol.s1, sol.s2, sol.s3, sol.s4,
                                                              sol.transmitted, q_da)], axis=-1)
-    geom = AirflowGeometry.from_panel(cfg)
+    geom = AirflowGeometry.from_sections(cfg.openings, cfg.facade)
     cp_b, cp_t = geom.wind_pressure_coefficients(w.wind_dir_deg, fac.azimuth_deg)
     wind = local_wind_speed(w.wind_speed_ms, terrain=site.terrain,
                             height_m=site.facade_height_m)
     scalars = np.stack([w.t_out_k, w.t_in_k, w.t_mrt_k, _sky(cfg, options, w), w.pressure_pa,
                         wind, cp_b, cp_t], axis=-1)
-    return _Knots(scalars, np.moveaxis(sources, 0, 1), _windward(cfg, w),
+    return _Knots(scalars, np.moveaxis(sources, 0, 1), _windward(cfg.facade, w),
                   fi.beam + sky + ground)
 
 
@@ -323,7 +297,7 @@ class ForcingTables:
                                                       0.0, 0.95))))
         if opt.optics == "lumped":
             return _knots_lumped(cfg, opt, w, self.phis_rad)
-        return _knots_fine(cfg, opt, w, self.phis_rad, fine_louver(cfg, opt))
+        return _knots_fine(cfg, opt, w, self.phis_rad, fine_louver(cfg.louver, opt))
 
     def _weather(self, sun_t: np.ndarray, weather_t: np.ndarray | None,
                  mid: WeatherInputs | None) -> WeatherInputs:

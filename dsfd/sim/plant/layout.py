@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dsfd.config.panel import PanelConfig
-from dsfd.physics.constants import P_STD, R_AIR
+from dsfd.physics.constants import R_AIR, STANDARD_PRESSURE_PA
 from dsfd.sim.plant.config import PlantOptions
 from dsfd.sim.plant.flow import IS_TOP
 
@@ -175,7 +175,7 @@ def capacities(cfg: PanelConfig, lay: Layout,
     rho_cp = mo.air_density_kgm3 * mo.air_heat_capacity_jkgk
     air = vol > 0
     cap[air] = rho_cp * vol[air]
-    p_ref = P_STD * (1.0 - 2.25577e-5 * cfg.site.elevation_m) ** 5.25588
+    p_ref = STANDARD_PRESSURE_PA * (1.0 - 2.25577e-5 * cfg.site.elevation_m) ** 5.25588
     return cap, vol, p_ref
 
 

@@ -20,17 +20,19 @@ come from :mod:`dsfd.sim.plant.convection`, the Jacobian from
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 from scipy.sparse import csc_matrix
 
 from dsfd.config.panel import PanelConfig
+from dsfd.config.parameters import CONVECTIVE_NAMES, Param
 from dsfd.physics.airflow import louver_flow_loss
 from dsfd.physics.constants import GRAVITY, R_AIR, SIGMA
 from dsfd.physics.forcing import TERRAIN_PROFILE
 from dsfd.sim.plant.actuators import Actuators
 from dsfd.sim.plant.advection import Advection2
-from dsfd.sim.plant.config import H_NAMES, PlantOptions, TrueParameters
+from dsfd.sim.plant.config import PlantOptions, TrueParameters
 from dsfd.sim.plant.convection import ConvectionGeometry, coefficients
 from dsfd.sim.plant.flow import (
     EB,
@@ -86,6 +88,18 @@ class Piece:
     target_open_list: list[bool] = field(default_factory=list)
 
 
+class _Films(NamedTuple):
+    """Convective coefficients of one evaluation [W/(m2 K)], per segment or scalar."""
+
+    h1: np.ndarray | float  # L1 cavity face
+    h2o: np.ndarray | float  # louver, outer sub-cavity side
+    h2i: np.ndarray | float  # louver, inner side
+    h3: np.ndarray | float  # L2 cavity face
+    h4: np.ndarray | float  # each DGU face ↔ the gap gas
+    h_out: np.ndarray | float
+    h_in: np.ndarray | float
+
+
 class PlantModel:
     """Network of one plant: topology, constants, right-hand side and Jacobian."""
 
@@ -113,7 +127,7 @@ class PlantModel:
                           + 1.0 / gl.interior_inner.emissivity_front - 1.0)
         self.a_l = 2.0 * lv.slat_width_m / lv.slat_pitch_m if lv else 0.0
         self.gap = geo.depth / 2 if has_louver else geo.depth
-        self.h_default = np.array([getattr(cfg.parameters, k).default for k in H_NAMES])
+        self.h_default = np.array(cfg.parameters.values("default", CONVECTIVE_NAMES))
         # Local wind of each segment relative to the façade centre (power law,
         # docs/model.md#plant-heat-transfer).
         a_site, _ = TERRAIN_PROFILE[cfg.site.terrain]
@@ -279,11 +293,24 @@ class PlantModel:
     def rhs(self, t: float, y: np.ndarray) -> np.ndarray:
         """dy/dt of the plant at time ``t`` [K/s and W]."""
         self.evaluations += 1
-        ctx, lay, nn = self.ctx, self.lay, self.nn
-        T = y[:nn]
+        ctx = self.ctx
+        T = y[:self.nn]
         s = (t - ctx.ts) * ctx.inv_len
         t_out, t_in, t_mrt, t_rad, p, wind, cp_b, cp_t = (ctx.fa + s * ctx.fd).tolist()
-        st = ctx.static
+        src, lw, k_l, hx = self._sources_and_louver(t, s)
+        fl = self.flows(t, T, p, t_out, t_in, wind, cp_b, cp_t, k_l)
+        m = fl["m"]
+        m_cav = m[EB] + m[IB]
+        films = self._films(T, fl, m_cav, p, t_out, t_in, wind)
+        gs = self._surface_conductances(T, films, lw, hx)
+        gb = self._boundary_conductances(T, films, t_rad, t_mrt)
+        return self._balance(t, T, gs, gb, fl, m_cav, src, (t_out, t_in, t_rad, t_mrt), p)
+
+    def _sources_and_louver(self, t: float, s: float
+                            ) -> tuple[np.ndarray, np.ndarray, float, float]:
+        """Absorbed short-wave per m² (interpolated in time, and in φ while the louver
+        moves), the cavity long-wave factors, the slats' flow loss and the lateral h_x."""
+        ctx = self.ctx
         if ctx.phi_moving:
             phi = ctx.act.phi_at(t)
             i, w = self.angle_weights(phi)
@@ -291,69 +318,92 @@ class PlantModel:
             src = ((1 - w) * (ctx.src_a[i] + s * ctx.src_d[i])
                    + w * (ctx.src_a[j] + s * ctx.src_d[j]))
             lw, k_l, hx = self.louver_terms(phi)
-        else:
-            src = st["src_a"] + s * st["src_d"]
-            lw, k_l, hx = st["lw"], st["k_l"], st["hx"]
-        fl = self.flows(t, T, p, t_out, t_in, wind, cp_b, cp_t, k_l)
-        m = fl["m"]
-        m_cav = m[EB] + m[IB]
-        sl = self.slices
+            return src, lw, k_l, hx
+        st = ctx.static
+        return st["src_a"] + s * st["src_d"], st["lw"], st["k_l"], st["hx"]
+
+    def _films(self, T: np.ndarray, fl: dict, m_cav: float, p: float, t_out: float,
+               t_in: float, wind: float) -> _Films:
+        """Convective coefficients of the surfaces [W/(m2 K)], per segment or constant,
+        times the plant's multipliers."""
+        ctx, opt, sl = self.ctx, self.opt, self.slices
         t1, t2, t3, t4 = T[sl["g1"]], T[sl["g2"]], T[sl["g3"]], T[sl["lv"]]
         to, ti = T[sl["ao"]], T[sl["ai"]]
         hs = ctx.h_scale
-        opt = self.opt
-        height = self.geo.height
         if opt.convection == "constant":
             h = hs * self.h_default
-            h1, h2o, h2i, h3, h_out, h_in = h[1], h[2], h[2], h[3], h[0], h[5]
+            h1, h2o, h2i, h3 = h[Param.H_CA1], h[Param.H_CA2], h[Param.H_CA2], h[Param.H_CA3]
+            h_out, h_in = h[Param.H_OUT], h[Param.H_IN]
         else:
             speed = abs(m_cav) / (fl["rho_mean"] * self.openings.cavity_area_m2)
             c = coefficients(self.conv_geo, t1, t2, t3, t4, to, ti, speed=speed,
                              upward=m_cav >= 0, p=p, t_out=t_out, t_in=t_in,
                              wind=wind * self.wind_profile, windward=ctx.windward,
                              gap_model=opt.dgu_gap == "iso15099")
-            h1, h2o, h2i, h3 = hs[1] * c.h1, hs[2] * c.h2o, hs[2] * c.h2i, hs[3] * c.h3
-            h_out, h_in = hs[0] * c.h_out, hs[5] * c.h_in
+            h1, h3 = hs[Param.H_CA1] * c.h1, hs[Param.H_CA3] * c.h3
+            h2o, h2i = hs[Param.H_CA2] * c.h2o, hs[Param.H_CA2] * c.h2i
+            h_out, h_in = hs[Param.H_OUT] * c.h_out, hs[Param.H_IN] * c.h_in
         if opt.dgu_gap == "constant_h":
-            h4 = hs[4] * self.h_default[4]
+            h4 = hs[Param.H_CA4] * self.h_default[Param.H_CA4]
         elif opt.convection == "constant":
-            h4 = hs[4] * 2.0 * iso15099_gap(t2, t3, self.dgu_gap, height, p)
+            h4 = hs[Param.H_CA4] * 2.0 * iso15099_gap(t2, t3, self.dgu_gap, self.geo.height, p)
         else:
-            h4 = hs[4] * 2.0 * c.h_gap
+            h4 = hs[Param.H_CA4] * 2.0 * c.h_gap
+        return _Films(h1, h2o, h2i, h3, h4, h_out, h_in)
+
+    def _surface_conductances(self, T: np.ndarray, films: _Films, lw: np.ndarray,
+                              hx: float) -> np.ndarray:
+        """Conductances of the links between nodes [W/K]: convection, the DGU gap, the
+        cavity long-wave (secant σ(T_a² + T_b²)(T_a + T_b)) and the lateral exchange."""
+        lay = self.lay
         gs = self.gs
         g = self.gsl
-        gs[g[0]] = h1
+        gs[g[0]] = films.h1
         if not self.has_louver:
             gs[g[1]] = NO_LOUVER_LINK
         elif lay.split:
-            gs[g[1]] = 0.5 * self.a_l * h2o
-            gs[g[2]] = 0.5 * self.a_l * h2i
+            gs[g[1]] = 0.5 * self.a_l * films.h2o
+            gs[g[2]] = 0.5 * self.a_l * films.h2i
         else:
-            gs[g[1]] = self.a_l * h2o
-        gs[g[3]] = h3
-        gs[g[4]] = h4
-        gs[g[5]] = h4
+            gs[g[1]] = self.a_l * films.h2o
+        gs[g[3]] = films.h3
+        gs[g[4]] = films.h4
+        gs[g[5]] = films.h4
         ta, tb = T[self.rad_a], T[self.rad_b]
         lwf = self.rad_factor
         lwf[self.n_rad_fixed:] = np.repeat(lw, lay.n)
         gs[g[6]] = lwf * SIGMA * (ta * ta + tb * tb) * (ta + tb)
         if lay.split:
             gs[g[7]] = hx
-        area = self.geo.seg_area
-        gs[:self.n_sym_m2] *= area
+        gs[:self.n_sym_m2] *= self.geo.seg_area
+        return gs
+
+    def _boundary_conductances(self, T: np.ndarray, films: _Films, t_rad: float,
+                               t_mrt: float) -> np.ndarray:
+        """Conductances to the outdoor and room air and radiant temperatures [W/K]."""
+        sl = self.slices
         gb = self.gb
-        n = lay.n
-        gb[0:n] = h_out
-        gb[2 * n:3 * n] = h_in
-        tr = np.concatenate((t1, t3))
+        n = self.lay.n
+        gb[0:n] = films.h_out
+        gb[2 * n:3 * n] = films.h_in
+        tr = np.concatenate((T[sl["g1"]], T[sl["g3"]]))
         te_r = self.rad_bnd_t
         te_r[:n] = t_rad
         te_r[n:] = t_mrt
         hr = self.rad_bnd_eps * SIGMA * (tr * tr + te_r * te_r) * (tr + te_r)
         gb[n:2 * n] = hr[:n]
         gb[3 * n:] = hr[n:]
-        gb *= area
-        te = np.concatenate((T, (t_out, t_in, t_rad, t_mrt)))
+        gb *= self.geo.seg_area
+        return gb
+
+    def _balance(self, t: float, T: np.ndarray, gs: np.ndarray, gb: np.ndarray, fl: dict,
+                 m_cav: float, src: np.ndarray, bounds: tuple[float, float, float, float],
+                 p: float) -> np.ndarray:
+        """dT/dt of the nodes from the link flows and sources, then the accumulators."""
+        nn, n = self.nn, self.lay.n
+        t_out, t_in = bounds[0], bounds[1]
+        m = fl["m"]
+        te = np.concatenate((T, bounds))
         lk = self.links
         ga = self.advective(m)
         f_sym = gs * (te[lk.sym_c] - te[lk.sym_r])
@@ -367,7 +417,7 @@ class PlantModel:
                                                      self._inflow_mix(m, m_cav, t_out, t_in, T))
             q += q_corr
             adv_total += float(q_corr.sum())
-        src_w = src * area
+        src_w = src * self.geo.seg_area
         q[:4 * n] += np.repeat(src_w[:4], n)
         cap = self.capacity(T)
         out = np.empty(self.ny)
@@ -378,7 +428,7 @@ class PlantModel:
                     self._q_air(m, fl, face_out, m_cav, t_out, t_in), float(src_w[5]) * n)
         self.last = {"cap": cap, "f_adv": f_adv, "flows": fl, "m_cav": m_cav, "t": t, "te": te,
                      "bnd_total": bnd_total, "face_out": face_out,
-                     "p": p, "phi_deg": ctx.act.phi_at(t), "src": src}
+                     "p": p, "phi_deg": self.ctx.act.phi_at(t), "src": src}
         return out
 
     def opening_temperatures(self, fl: dict, face_out: float | None, m_cav: float

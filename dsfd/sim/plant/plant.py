@@ -25,8 +25,8 @@ import numpy as np
 from scipy.integrate import Radau
 
 from dsfd.config.panel import PanelConfig
+from dsfd.physics.boundary import WeatherInputs
 from dsfd.physics.constants import T_ZERO
-from dsfd.physics.forcing import WeatherInputs
 from dsfd.sim.plant.actuators import (
     DAMPER_SHUT,
     Actuators,
@@ -295,7 +295,7 @@ class Plant:
         t = self.time_s - 0.5 * min(self._last_len, float(self.cfg.model.step_s))
         w = weather_at(self.series, self.cfg, np.array([t]), self.room_c(np.array([t])))
         return {"t_out_c": float(w.t_out_k[0] - T_ZERO),
-                "ghi_wm2": float(station_ghi(self.cfg, w)[0]),
+                "ghi_wm2": float(station_ghi(self.cfg.site, w)[0]),
                 "wind_speed_ms": float(w.wind_speed_ms[0]),
                 "wind_dir_deg": float(w.wind_dir_deg[0])}
 

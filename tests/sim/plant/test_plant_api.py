@@ -5,9 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from dsfd.config.parameters import N_PARAMS, Param
 from dsfd.physics.constants import T_ZERO
 from dsfd.sim.plant.actuators import Command
-from dsfd.sim.plant.config import H_NAMES, PlantOptions, TrueParameters, drift_factors
+from dsfd.sim.plant.config import PlantOptions, TrueParameters, drift_factors
 from dsfd.sim.plant.plant import Plant
 from dsfd.sim.replay import weather_inputs
 from tests.sim.conftest import HOUR, day_start
@@ -29,8 +30,9 @@ def test_true_parameters_are_seeded_draws_in_the_e16_ranges(suwon, rmis_raw):
     assert Plant(suwon, seed=3, weather_series=rmis_raw).params == draws[3]
     p = draws[0]
     theta = p.lumped_theta(suwon)
-    assert theta.shape == (9,) and theta[6] == p.f
-    assert theta[0] == pytest.approx(p.h_multipliers[0] * suwon.parameters.h_out.default)
+    assert theta.shape == (N_PARAMS,) and theta[Param.F] == p.f
+    assert theta[Param.H_OUT] == pytest.approx(p.h_multipliers[Param.H_OUT]
+                                               * suwon.parameters.h_out.default)
 
 
 def test_state_flows_and_label(small):
@@ -104,7 +106,7 @@ def test_drift_and_options(suwon, rmis):
                        drift_h_per_day=-0.1)
     d_rho, factors = drift_factors(opt, 2 * 86400.0)
     assert d_rho == pytest.approx(0.04)
-    assert factors[H_NAMES.index("h_ca1")] == pytest.approx(0.8) and factors.sum() == 5.8
+    assert factors[Param.H_CA1] == pytest.approx(0.8) and factors.sum() == 5.8
     plant = Plant(suwon, opt, seed=1, weather_series=rmis,
                   params=TrueParameters.nominal(suwon))
     plant.reset(day_start(rmis, 1) + 11 * HOUR)

@@ -67,6 +67,7 @@ def test_energy_balance_closes_over_the_day(day_run):
     assert abs(eb["boundary_j"]) > 1e5 and abs(eb["enthalpy_j"]) > 1e5
 
 
+@pytest.mark.slow  # its fixture runs the plant over the paper's four days: 20-35 s
 def test_mean_velocity_per_regime_is_in_the_papers_range(paper_period_run):
     assert paper_period_run.steps == 4 * 1440
     table = velocity_table(paper_period_run.data)
