@@ -69,6 +69,10 @@ class PlantUnderTest(Protocol):
         """Heat into the room since the start [J] by term, and the hours it covers."""
         ...
 
+    def room_heat_now(self) -> dict[str, float] | None:
+        """The same by term [J] now, None while the plant is busy integrating (per cycle)."""
+        ...
+
 
 class Integration(Protocol):
     """Something beside the loop that reads what the daemon stores (the MQTT publisher).
@@ -351,7 +355,7 @@ async def serve(opts: RunOptions, cfg: PanelConfig, *, state_dir: Path,
         driver = build_drivers(cfg.devices, clock=clock.monotonic)
     store = Store.open(state_dir)
     store.begin_run(panel=cfg.panel.id, mode=opts.mode, version=__version__,
-                    config_path=str(opts.config_path))
+                    config_path=str(opts.config_path), config=dataclasses.asdict(cfg))
     if store.moved_aside is not None:
         log.error("database was unusable and was moved aside; started a new one",
                   moved_to=str(store.moved_aside))
@@ -362,7 +366,8 @@ async def serve(opts: RunOptions, cfg: PanelConfig, *, state_dir: Path,
     # A dry run never writes to hardware; an in-process simulated plant may follow.
     write_enabled = not opts.dry_run or not getattr(driver, "hardware", True)
     controller = Controller(cfg, driver=driver, clock=clock, store=store,
-                            calibration=calibration, write_enabled=write_enabled)
+                            calibration=calibration, write_enabled=write_enabled,
+                            plant_heat_j=None if plant is None else plant.room_heat_now)
     daemon = _Daemon(opts, cfg, clock, driver, store, controller, notifier, integrations)
     daemon.summary.start_calibration(calibration)
     loop = asyncio.get_running_loop()
