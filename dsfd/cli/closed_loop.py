@@ -9,11 +9,11 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
 
+from dsfd.cli.progress import Progress
 from dsfd.config.panel import PanelConfig
 from dsfd.measured import iso_utc, parse_iso_utc
 from dsfd.weather import WeatherSeries
@@ -106,13 +106,8 @@ def run(args: argparse.Namespace, cfg: PanelConfig, series: WeatherSeries,
         controller=args.controller, calibration=args.calibration, seed=args.seed, hours=hours,
         start_s=None if args.start is None else parse_iso_utc(args.start),
         offline_theta=offline, fixed_command=fixed, options=options)
-    tty = sys.stderr.isatty()
-
-    def progress(i: int, n: int) -> None:
-        if tty and (i % 60 == 0 or i == n):
-            print(f"\r  {i}/{n} cycles", end="" if i < n else "\n", file=sys.stderr)
-
-    result = run_closed_loop(cfg, series, settings, progress=progress)
+    bar = Progress("closed loop, cycles")
+    result = run_closed_loop(cfg, series, settings, progress=bar)
     s = result.summary()
     end = result.start_s + result.cycles * result.step_s
     print(f"dsfd simulate — panel {cfg.panel.id}, truth plant (seed {args.seed}), closed loop: "
