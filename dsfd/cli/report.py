@@ -7,7 +7,6 @@ matplotlib missing (``pip install 'dsfd[report]'``).
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import json
 import sys
 from pathlib import Path
@@ -36,7 +35,9 @@ def report_available() -> str | None:
     """Why ``dsfd report`` cannot draw, or None."""
     from dsfd.report import INSTALL_HINT
 
-    if importlib.util.find_spec("matplotlib") is None:
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError:
         return f"matplotlib is not installed: {INSTALL_HINT}"
     return None
 

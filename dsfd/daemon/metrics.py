@@ -26,12 +26,12 @@ dsfd_hold_active                       gauge    1 while a manual hold decides (m
 dsfd_room_heat_watts{term}             gauge    the model's room-side heat of the last step
 =====================================  =======  ==============================================
 
-Counters count since the daemon started (Prometheus handles the restart).
+Counters count since the daemon started (Prometheus handles the restart); the counters'
+``*_created`` series are left out.
 """
 
 from __future__ import annotations
 
-import importlib.util
 import math
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -49,7 +49,9 @@ def metrics_problem(path: str | None) -> str | None:
     """Why ``daemon.metrics_file`` cannot be written, or None (checked at start and reload)."""
     if path is None:
         return None
-    if importlib.util.find_spec("prometheus_client") is None:
+    try:
+        import prometheus_client  # noqa: F401
+    except ImportError:
         return f"needs prometheus_client, which is not installed: {INSTALL_HINT}"
     parent = Path(path).parent
     if not parent.is_dir():
@@ -61,8 +63,11 @@ class MetricsFile:
     """The metrics of one panel and the file they are written to."""
 
     def __init__(self, path: str | Path, panel: str) -> None:
-        from prometheus_client import CollectorRegistry, Counter, Gauge
+        from prometheus_client import CollectorRegistry, Counter, Gauge, disable_created_metrics
 
+        # Counters' ``*_created`` series (wall time of the counter's creation) only repeat the
+        # daemon's start time for a textfile; the process is the daemon, so this is global.
+        disable_created_metrics()
         self.path = str(path)
         self.panel = panel
         r = self.registry = CollectorRegistry()

@@ -41,6 +41,8 @@ HEAT_COLOURS = {"q_cv_rd": "#d62728", "q_sol_trans": "#ff7f0e", "q_air": "#1f77b
 PARAM_UNITS = {"h": "W/(m² K)", "f": "-", "c": "m³/(s Paⁿ)", "n": "-"}
 
 
+#: Legend to the right of a panel of a time-series figure (all panels share that margin).
+OUTSIDE = {"loc": "upper left", "bbox_to_anchor": (1.0, 1.0), "fontsize": 8, "frameon": False}
 #: Log axes labelled 3, 10, 40 rather than 3×10⁰, 10¹, 4×10¹.
 PLAIN = FuncFormatter(lambda v, _pos: f"{v:g}")
 PLAIN_MINOR = FuncFormatter(lambda v, _pos: f"{v:g}" if f"{v:.0e}"[0] in "235" else "")
@@ -154,8 +156,7 @@ def states_figure(ctx: Context) -> Figure:
     _time_axis(ctx, ax, label=True)
     axes[0].legend(loc="lower left", bbox_to_anchor=(0.0, 1.02), ncols=3, fontsize=9,
                    frameon=False, borderaxespad=0.0)
-    hv, lv = ax.get_legend_handles_labels()
-    ax.legend(hv, lv, loc="upper left", fontsize=8)
+    ax.legend(loc="best", fontsize=8, framealpha=0.85)
     fig.suptitle("Façade temperatures and cavity air speed: measured vs the self-calibrating "
                  "model's predictions", fontsize=13, x=0.01, ha="left")
     return fig
@@ -184,7 +185,7 @@ def controls_figure(ctx: Context) -> Figure:
                label=m, linewidth=0)
     ax.set_yticks([])
     ax.set_ylabel("decided\nby", rotation=0, ha="right", va="center")
-    ax.legend(loc="upper left", bbox_to_anchor=(1.0, 1.3), fontsize=8, frameon=False)
+    ax.legend(**OUTSIDE)
     _time_axis(ctx, ax, label=False)
     # Louver with the solar elevation (the paper's Fig. 11a).
     ax = axes[1]
@@ -198,7 +199,7 @@ def controls_figure(ctx: Context) -> Figure:
     ax.set_ylim(-95, 95)
     ax.set_yticks(range(-90, 91, 30))
     ax.set_ylabel("angle [deg]")
-    ax.legend(loc="upper left", fontsize=8)
+    ax.legend(**OUTSIDE)
     _time_axis(ctx, ax, label=False)
     ax = axes[2]
     ax.step(*_broken(ctx, applied["afr"]), where="post", color="#1f77b4", lw=1.4)
@@ -212,7 +213,7 @@ def controls_figure(ctx: Context) -> Figure:
     _time_axis(ctx, ax, label=False)
     ax = axes[4]
     ghi = h.good("ghi_wm2")
-    ax.plot(*_broken(ctx, ghi), color="#bcbd22", lw=1.2, label="global horizontal irradiance")
+    ax.plot(*_broken(ctx, ghi), color="#bcbd22", lw=1.2, label="global horizontal")
     ax.set_ylim(bottom=0, top=max(100.0, float(np.nanmax(ghi)) * 1.1)
                 if np.isfinite(ghi).any() else 100.0)
     ax.set_ylabel("irradiance\n[W/m²]")
@@ -224,7 +225,7 @@ def controls_figure(ctx: Context) -> Figure:
     if "t_room_c" in h.values:
         ax.plot(*_broken(ctx, h.good("t_room_c")), color="#7f7f7f", lw=1.0, label="room air")
     ax.set_ylabel("air temperature\n[°C]")
-    ax.legend(loc="upper left", fontsize=8)
+    ax.legend(**OUTSIDE)
     _time_axis(ctx, ax, label=True)
     fig.suptitle("What the controller commanded: louver, airflow regime and damper opening, "
                  "with the weather", fontsize=13, x=0.01, ha="left")
