@@ -28,6 +28,7 @@ table { border-collapse: collapse; margin: 0.4em 0 1em; font-size: 0.9em; }
 th, td { border: 1px solid #ccc; padding: 0.25em 0.55em; text-align: right; }
 th { background: #f0f0f0; }
 td.l, th.l { text-align: left; }
+td:first-child { white-space: nowrap; }
 tr.total td { font-weight: bold; background: #fafafa; }
 figure { margin: 1em 0 2em; }
 figure img { width: 100%; height: auto; border: 1px solid #eee; }
