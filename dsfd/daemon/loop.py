@@ -47,7 +47,7 @@ from dsfd.control.paper_sqp import optimise_paper_sqp
 from dsfd.daemon.calibration import CalibrationStage, UpdateOutcome
 from dsfd.daemon.clock import Clock, Slot
 from dsfd.daemon.logging_setup import get_logger
-from dsfd.daemon.observer import STATE_SIGNALS, StateEstimate, StateObserver
+from dsfd.daemon.observer import STATE_SIGNALS, StateEstimate, StateObserver, horizon_end
 from dsfd.daemon.quality import QualityChecker, QualityReport
 from dsfd.daemon.record import cycle_record
 from dsfd.daemon.safety import SafetyContext, SafetyPipeline, SafetyResult
@@ -61,7 +61,6 @@ from dsfd.drivers.base import (
     WriteResult,
     command_from_values,
 )
-from dsfd.estimation.params import with_offsets
 from dsfd.physics.constants import T_ZERO
 from dsfd.physics.forcing import FacadeOptics, Forcing, WeatherInputs, step_inputs
 from dsfd.physics.model import LumpedModel
@@ -363,23 +362,14 @@ class Controller:
 
     def _horizon_end(self, estimate: StateEstimate, forecast: Forcing | None,
                      applied: Command | None) -> np.ndarray | None:
-        """x1..x6 at the end of the horizon with ``applied`` held on the forecast [K], as the
-        optimiser predicts (same model, θ̂ and heat-flux offsets); None without a usable
-        estimate, a forecast or a known position."""
         if forecast is None or applied is None or not estimate.usable:
             return None
         try:
-            loads = self.optics.loads(forecast, math.radians(applied.phi_deg))
-            inp = with_offsets(step_inputs(forecast, loads), self.calibration.offsets)
-            steps = forecast.time_s.shape[0]
-            traj = self.observer.model.rollout(
-                estimate.x_k, np.full((1, steps), applied.afr),
-                np.full((1, steps), applied.or_pct / 100.0), inp, self.calibration.theta)
+            return horizon_end(self.observer.model, self.optics, forecast, estimate.x_k,
+                               applied, self.calibration.theta, self.calibration.offsets)
         except (ValueError, ArithmeticError, np.linalg.LinAlgError):
             log.exception("horizon prediction failed")
             return None
-        x_end = traj.x[0, -1]
-        return x_end if np.all(np.isfinite(x_end)) else None
 
     def _optimiser(self, problem: ControlProblem) -> Callable[[], Decision]:
         if self.cfg.control.optimiser == "paper-sqp":

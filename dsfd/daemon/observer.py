@@ -24,9 +24,10 @@ from dsfd.estimation.observer import fill_state
 from dsfd.estimation.params import with_offsets
 from dsfd.physics.constants import T_ZERO
 from dsfd.physics.coupling import StepInputs
+from dsfd.physics.forcing import FacadeOptics, Forcing, step_inputs
 from dsfd.physics.model import LumpedModel
 
-__all__ = ["STATE_SIGNALS", "StateEstimate", "StateObserver", "StatePrediction"]
+__all__ = ["STATE_SIGNALS", "StateEstimate", "StateObserver", "StatePrediction", "horizon_end"]
 
 #: Sensors of x1..x5, in state order.
 STATE_SIGNALS: tuple[str, ...] = ("x1_c", "x2_c", "x3_c", "x4_c", "x5_c")
@@ -154,3 +155,17 @@ class StateObserver:
         self._x = x if np.all(np.isfinite(x)) else None
         return StateEstimate(x, tuple(int(min(a, _NEVER)) for a in self._age), not why, why,
                              prediction)
+
+
+def horizon_end(model: LumpedModel, optics: FacadeOptics, forecast: Forcing, x_k: np.ndarray,
+                applied: Command, theta: np.ndarray, offsets: np.ndarray) -> np.ndarray | None:
+    """x1..x6 at the end of the horizon [K] with ``applied`` held from ``x_k`` on the
+    ``forecast``, as the optimiser predicts it (same model, θ̂ and heat-flux offsets
+    [W/m2]); None if the rollout is not finite. One candidate, ``len(forecast)`` steps."""
+    loads = optics.loads(forecast, np.radians(applied.phi_deg))
+    inp = with_offsets(step_inputs(forecast, loads), offsets)
+    steps = forecast.time_s.shape[0]
+    traj = model.rollout(x_k, np.full((1, steps), applied.afr),
+                         np.full((1, steps), applied.or_pct / 100.0), inp, theta)
+    x_end = traj.x[0, -1]
+    return x_end if np.all(np.isfinite(x_end)) else None

@@ -1,123 +1,47 @@
-"""The report's figures, drawn with matplotlib's Agg canvas (no display, no pyplot state) and
-returned as PNG bytes for embedding.
-
-Every figure has a title that says what it shows, units on its axes and local standard
-time on its time axes. A time series is broken (not bridged by a line) where cycles are
-missing, and every figure draws a readable "nothing to show" note instead of an empty or
-failing plot when its data are absent (a one-hour log, a day without sun, an old database).
+"""The report's six figures, each with a title that says what it shows, units on its axes
+and local standard time on its time axes. A time series is broken (not bridged by a line)
+where cycles are missing, and every figure draws a readable "nothing to show" note instead of
+an empty or failing plot when its data are absent (a one-hour log, a day without sun, an old
+database). Shared pieces: :mod:`dsfd.report.plotting`.
 """
 
 from __future__ import annotations
 
-import io
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from matplotlib.axes import Axes
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.dates import AutoDateLocator, ConciseDateFormatter
 from matplotlib.figure import Figure
-from matplotlib.ticker import FuncFormatter, MaxNLocator, NullFormatter
+from matplotlib.ticker import MaxNLocator, NullFormatter
 
 from dsfd.config.panel import REGIME_NAMES
 from dsfd.physics.solar import solar_position
 from dsfd.report.kpis import HEAT_TERMS, STATES, Kpis, PredictionErrors, zone_name
+from dsfd.report.plotting import (
+    HEAT_COLOURS,
+    METHOD_COLOURS,
+    OUTSIDE,
+    PARAM_UNITS,
+    PLAIN,
+    PLAIN_MINOR,
+    STATE_COLOURS,
+    STATE_LABELS,
+    WIDTH_IN,
+    Context,
+    ReportFigure,
+    bin_width_s,
+    binned,
+    broken,
+    nothing,
+    png,
+    regime_colour,
+    time_axis,
+)
 from dsfd.storage.history import History
 from dsfd.weather.sky import SKY_CONDITIONS, sky_conditions
 
 __all__ = ["FIGURES", "ReportFigure", "draw_figures"]
-
-WIDTH_IN = 11.0
-STATE_LABELS = {"x1": "x1 exterior pane", "x2": "x2 DGU outer pane", "x3": "x3 DGU inner pane",
-                "x4": "x4 louver slat", "x5": "x5 cavity air"}
-STATE_COLOURS = {"x1": "#1f77b4", "x2": "#ff7f0e", "x3": "#2ca02c", "x4": "#d62728",
-                 "x5": "#9467bd"}
-METHOD_COLOURS = {"mpc": "#2ca02c", "paper-sqp": "#17becf", "rule": "#ff7f0e",
-                  "safe": "#d62728", "manual": "#9467bd"}
-HEAT_COLOURS = {"q_cv_rd": "#d62728", "q_sol_trans": "#ff7f0e", "q_air": "#1f77b4",
-                "q_da": "#bcbd22"}
-PARAM_UNITS = {"h": "W/(m² K)", "f": "-", "c": "m³/(s Paⁿ)", "n": "-"}
-
-
-#: Legend to the right of a panel of a time-series figure (all panels share that margin).
-OUTSIDE = {"loc": "upper left", "bbox_to_anchor": (1.0, 1.0), "fontsize": 8, "frameon": False}
-#: Log axes labelled 3, 10, 40 rather than 3×10⁰, 10¹, 4×10¹.
-PLAIN = FuncFormatter(lambda v, _pos: f"{v:g}")
-PLAIN_MINOR = FuncFormatter(lambda v, _pos: f"{v:g}" if f"{v:.0e}"[0] in "235" else "")
-
-
-@dataclass(frozen=True)
-class ReportFigure:
-    """One figure of the report: its HTML id, caption and PNG image."""
-
-    fig_id: str
-    title: str
-    caption: str
-    png: bytes
-
-
-@dataclass(frozen=True)
-class Context:
-    """What every figure needs besides the history."""
-
-    history: History
-    kpis: Kpis
-    errors: PredictionErrors
-    config: Mapping[str, Any] | None
-    dpi: int
-
-    @property
-    def offset_h(self) -> float:
-        return self.kpis.utc_offset_h
-
-    def local(self, time_s: np.ndarray) -> np.ndarray:
-        """UTC seconds → naive local standard datetimes (for the time axes)."""
-        t = np.asarray(time_s, float) + self.offset_h * 3600.0
-        return (t * 1e3).astype("int64").astype("datetime64[ms]")
-
-    def site(self) -> tuple[float, float] | None:
-        site = (self.config or {}).get("site") or {}
-        lat, lon = site.get("latitude_deg"), site.get("longitude_deg")
-        return None if lat is None or lon is None else (float(lat), float(lon))
-
-
-def _broken(ctx: Context, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(times, values) with a NaN inserted wherever cycles are missing, so lines break."""
-    t = ctx.history.time_s
-    if t.size < 2:
-        return ctx.local(t), y
-    gap = (np.diff(t) > 1.5 * ctx.kpis.step_s) | (np.diff(ctx.history.run_id) != 0)
-    at = np.flatnonzero(gap) + 1
-    tt = np.insert(t, at, t[at - 1] + ctx.kpis.step_s / 2)
-    yy = np.insert(np.asarray(y, float), at, np.nan)
-    return ctx.local(tt), yy
-
-
-def _time_axis(ctx: Context, ax: Axes, *, label: bool, max_ticks: int = 10) -> None:
-    locator = AutoDateLocator(minticks=2 if max_ticks < 5 else 4, maxticks=max_ticks)
-    ax.xaxis.set_major_locator(locator)
-    ax.xaxis.set_major_formatter(ConciseDateFormatter(locator))
-    t = ctx.local(ctx.history.time_s)
-    if t.size:
-        pad = np.timedelta64(int(ctx.kpis.step_s * 500), "ms")
-        ax.set_xlim(t[0] - pad, t[-1] + pad)
-    if label:
-        ax.set_xlabel(f"local standard time ({zone_name(ctx.offset_h)})")
-    ax.grid(True, alpha=0.3)
-
-
-def _nothing(ax: Axes, text: str) -> None:
-    ax.text(0.5, 0.5, text, transform=ax.transAxes, ha="center", va="center", fontsize=10,
-            color="#555555", wrap=True)
-
-
-def _png(fig: Figure, dpi: int) -> bytes:
-    FigureCanvasAgg(fig)
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=dpi)
-    return buf.getvalue()
 
 
 # ---------------------------------------------------------------------------- the figures
@@ -130,30 +54,30 @@ def states_figure(ctx: Context) -> Figure:
     for ax, s in zip(axes[:5], STATES, strict=True):
         meas = h.good(f"{s}_c")
         pred = h.model[f"pred_{s}_c"]
-        ax.plot(*_broken(ctx, meas), color="black", lw=1.2, label="measured")
-        ax.plot(*_broken(ctx, pred), color=STATE_COLOURS[s], lw=1.0,
+        ax.plot(*broken(ctx, meas), color="black", lw=1.2, label="measured")
+        ax.plot(*broken(ctx, pred), color=STATE_COLOURS[s], lw=1.0,
                 label="predicted one step (1 cycle) ahead")
         hz = h.model[f"hz_{s}_c"]
         if horizon > 0 and np.isfinite(hz).any():
             # Shown at the time it predicts.
-            tt, yy = _broken(ctx, hz)
+            tt, yy = broken(ctx, hz)
             ax.plot(tt + np.timedelta64(int(horizon * 1e3), "ms"), yy, color=STATE_COLOURS[s],
                     lw=0.9, ls="--", alpha=0.8,
                     label=f"predicted {horizon / 60:g} min ahead (applied command held)")
         ax.set_ylabel(f"{STATE_LABELS[s]}\n[°C]")
         if not (np.isfinite(meas).any() or np.isfinite(pred).any()):
-            _nothing(ax, f"no reading and no prediction of {s}")
-        _time_axis(ctx, ax, label=False)
+            nothing(ax, f"no reading and no prediction of {s}")
+        time_axis(ctx, ax, label=False)
     ax = axes[5]
     v = np.abs(h.good("v_cav_ms")) * 100.0
     pv = h.model["pred_v_cav_ms"] * 100.0
-    ax.plot(*_broken(ctx, v), color="black", lw=1.2, label="measured |v|")
-    ax.plot(*_broken(ctx, pv), color="#8c564b", lw=1.0, label="predicted one step ahead")
+    ax.plot(*broken(ctx, v), color="black", lw=1.2, label="measured |v|")
+    ax.plot(*broken(ctx, pv), color="#8c564b", lw=1.0, label="predicted one step ahead")
     ax.set_ylabel("cavity air speed\n[cm/s]")
     ax.set_ylim(bottom=0)
     if not (np.isfinite(v).any() or np.isfinite(pv).any()):
-        _nothing(ax, "no cavity speed measured or predicted")
-    _time_axis(ctx, ax, label=True)
+        nothing(ax, "no cavity speed measured or predicted")
+    time_axis(ctx, ax, label=True)
     axes[0].legend(loc="lower left", bbox_to_anchor=(0.0, 1.02), ncols=3, fontsize=9,
                    frameon=False, borderaxespad=0.0)
     ax.legend(loc="best", fontsize=8, framealpha=0.85)
@@ -186,47 +110,47 @@ def controls_figure(ctx: Context) -> Figure:
     ax.set_yticks([])
     ax.set_ylabel("decided\nby", rotation=0, ha="right", va="center")
     ax.legend(**OUTSIDE)
-    _time_axis(ctx, ax, label=False)
+    time_axis(ctx, ax, label=False)
     # Louver with the solar elevation (the paper's Fig. 11a).
     ax = axes[1]
-    ax.step(*_broken(ctx, applied["phi_deg"]), where="post", color="black", lw=1.4,
+    ax.step(*broken(ctx, applied["phi_deg"]), where="post", color="black", lw=1.4,
             label="louver angle")
     site = ctx.site()
     if site is not None and len(h):
         elev = solar_position(h.time_s, *site).elevation_deg
-        ax.plot(*_broken(ctx, np.where(elev > 0, elev, np.nan)), color="#ff7f0e", lw=1.0,
+        ax.plot(*broken(ctx, np.where(elev > 0, elev, np.nan)), color="#ff7f0e", lw=1.0,
                 label="solar elevation")
     ax.set_ylim(-95, 95)
     ax.set_yticks(range(-90, 91, 30))
     ax.set_ylabel("angle [deg]")
     ax.legend(**OUTSIDE)
-    _time_axis(ctx, ax, label=False)
+    time_axis(ctx, ax, label=False)
     ax = axes[2]
-    ax.step(*_broken(ctx, applied["afr"]), where="post", color="#1f77b4", lw=1.4)
+    ax.step(*broken(ctx, applied["afr"]), where="post", color="#1f77b4", lw=1.4)
     _regime_ticks(ax)
     ax.set_ylabel("airflow regime\n(1-10, Fig. 4)")
-    _time_axis(ctx, ax, label=False)
+    time_axis(ctx, ax, label=False)
     ax = axes[3]
-    ax.step(*_broken(ctx, applied["or_pct"]), where="post", color="#2ca02c", lw=1.4)
+    ax.step(*broken(ctx, applied["or_pct"]), where="post", color="#2ca02c", lw=1.4)
     ax.set_ylim(-5, 105)
     ax.set_ylabel("damper opening\n[%]")
-    _time_axis(ctx, ax, label=False)
+    time_axis(ctx, ax, label=False)
     ax = axes[4]
     ghi = h.good("ghi_wm2")
-    ax.plot(*_broken(ctx, ghi), color="#bcbd22", lw=1.2, label="global horizontal")
+    ax.plot(*broken(ctx, ghi), color="#bcbd22", lw=1.2, label="global horizontal")
     ax.set_ylim(bottom=0, top=max(100.0, float(np.nanmax(ghi)) * 1.1)
                 if np.isfinite(ghi).any() else 100.0)
     ax.set_ylabel("irradiance\n[W/m²]")
     if not np.isfinite(ghi).any():
-        _nothing(ax, "no good irradiance reading")
-    _time_axis(ctx, ax, label=False)
+        nothing(ax, "no good irradiance reading")
+    time_axis(ctx, ax, label=False)
     ax = axes[5]
-    ax.plot(*_broken(ctx, h.good("t_out_c")), color="#17becf", lw=1.2, label="outdoor air")
+    ax.plot(*broken(ctx, h.good("t_out_c")), color="#17becf", lw=1.2, label="outdoor air")
     if "t_room_c" in h.values:
-        ax.plot(*_broken(ctx, h.good("t_room_c")), color="#7f7f7f", lw=1.0, label="room air")
+        ax.plot(*broken(ctx, h.good("t_room_c")), color="#7f7f7f", lw=1.0, label="room air")
     ax.set_ylabel("air temperature\n[°C]")
     ax.legend(**OUTSIDE)
-    _time_axis(ctx, ax, label=True)
+    time_axis(ctx, ax, label=True)
     fig.suptitle("What the controller commanded: louver, airflow regime and damper opening, "
                  "with the weather", fontsize=13, x=0.01, ha="left")
     return fig
@@ -242,7 +166,7 @@ def regimes_by_sky_figure(ctx: Context) -> Figure:
     fig.suptitle("Airflow regime chosen under each sky condition (share of cycles)",
                  fontsize=13, x=0.01, ha="left")
     if site is None or not len(h):
-        _nothing(ax, "sky condition unknown: the site is not recorded for this run")
+        nothing(ax, "sky condition unknown: the site is not recorded for this run")
         ax.set_axis_off()
         return fig
     # The irradiance of a cycle is the mean of the interval ending at it.
@@ -253,7 +177,7 @@ def regimes_by_sky_figure(ctx: Context) -> Figure:
     for r in regimes:
         share = np.array([np.mean(afr[cond == c] == r) if np.any(cond == c) else 0.0
                           for c in names])
-        bars = ax.barh(names, share * 100, left=left, color=_regime_colour(r),
+        bars = ax.barh(names, share * 100, left=left, color=regime_colour(r),
                        label=f"{r}: {REGIME_NAMES.get(r, '?')}")
         for b, s in zip(bars, share, strict=True):
             if s >= 0.06:
@@ -275,12 +199,6 @@ def regimes_by_sky_figure(ctx: Context) -> Figure:
     return fig
 
 
-def _regime_colour(r: int) -> str:
-    palette = ("#1f77b4", "#aec7e8", "#ff7f0e", "#ffbb78", "#2ca02c", "#98df8a", "#d62728",
-               "#ff9896", "#9467bd", "#7f7f7f")
-    return palette[(r - 1) % len(palette)]
-
-
 def parameters_figure(ctx: Context) -> Figure:
     """The calibrated parameters over time with their bounds and prior."""
     h = ctx.history
@@ -298,7 +216,7 @@ def parameters_figure(ctx: Context) -> Figure:
         values = p.values.get(name)
         b = bounds_doc.get(name) or {}
         if values is None or not np.isfinite(values).any():
-            _nothing(ax, "not recorded")
+            nothing(ax, "not recorded")
         else:
             tt = np.append(p.time_s, max(end, p.time_s[-1]))
             vv = np.append(values, values[-1])
@@ -314,7 +232,7 @@ def parameters_figure(ctx: Context) -> Figure:
             lo, hi = ax.get_ylim()
             # Minor labels (2, 3, 5 …) only where a decade or two shows: else a wall of text.
             ax.yaxis.set_minor_formatter(PLAIN_MINOR if hi / lo < 30 else NullFormatter())
-        _time_axis(ctx, ax, label=False, max_ticks=4)
+        time_axis(ctx, ax, label=False, max_ticks=4)
         ax.tick_params(axis="x", labelsize=8)
         ax.tick_params(axis="y", which="both", labelsize=8)
     ax = axes[9]
@@ -334,33 +252,12 @@ def parameters_figure(ctx: Context) -> Figure:
     if drawn:
         ax.legend(fontsize=7, ncols=2, loc="best")
     else:
-        _nothing(ax, "no offsets calibrated")
-    _time_axis(ctx, ax, label=False, max_ticks=4)
+        nothing(ax, "no offsets calibrated")
+    time_axis(ctx, ax, label=False, max_ticks=4)
     ax.tick_params(axis="both", labelsize=8)
     fig.supxlabel(f"local standard time ({zone_name(ctx.offset_h)}); dots: on-line updates",
                   fontsize=10)
     return fig
-
-
-def _bin_width_s(span_s: float) -> float:
-    for minutes in (10, 15, 30, 60, 120, 180, 360, 720, 1440):
-        if span_s / (minutes * 60) <= 48:
-            return minutes * 60.0
-    return 86400.0
-
-
-def _binned(t: np.ndarray, e: np.ndarray, width_s: float) -> tuple[np.ndarray, np.ndarray]:
-    """Bin centres and the mean of the finite values of ``e`` in each (NaN if none)."""
-    if not t.size:
-        return t, e
-    k = np.floor((t - t[0]) / width_s).astype(int)
-    n = int(k.max()) + 1
-    ok = np.isfinite(e)
-    sums = np.bincount(k[ok], weights=e[ok], minlength=n)
-    counts = np.bincount(k[ok], minlength=n)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        mean = np.where(counts > 0, sums / np.maximum(counts, 1), np.nan)
-    return t[0] + (np.arange(n) + 0.5) * width_s, mean
 
 
 def prediction_error_figure(ctx: Context) -> Figure:
@@ -369,7 +266,7 @@ def prediction_error_figure(ctx: Context) -> Figure:
     fig = Figure(figsize=(WIDTH_IN, 6.4), layout="constrained")
     axes = fig.subplots(2, 1, sharex=True)
     span = float(h.time_s[-1] - h.time_s[0]) if len(h) else 0.0
-    width = _bin_width_s(span)
+    width = bin_width_s(span)
     horizon_min = err.horizon_steps * ctx.kpis.step_s / 60
     panels = ((axes[0], err.model, err.persistence,
                f"one step ({ctx.kpis.step_s / 60:g} min) ahead"),
@@ -381,7 +278,7 @@ def prediction_error_figure(ctx: Context) -> Figure:
             e = model.get(s)
             if e is None or not np.isfinite(e).any():
                 continue
-            tb, mb = _binned(h.time_s, e, width)
+            tb, mb = binned(h.time_s, e, width)
             ax.plot(ctx.local(tb), mb, "-o", ms=3, color=STATE_COLOURS[s], lw=1.2,
                     label=STATE_LABELS[s])
             any_drawn = True
@@ -390,7 +287,7 @@ def prediction_error_figure(ctx: Context) -> Figure:
         mean_p = np.where(counts > 0, np.nansum(stacked, axis=0) / np.maximum(counts, 1),
                           np.nan)
         if np.isfinite(mean_p).any():
-            tb, mb = _binned(h.time_s, mean_p, width)
+            tb, mb = binned(h.time_s, mean_p, width)
             ax.plot(ctx.local(tb), mb, "--", color="black", lw=1.2,
                     label="persistence (last reading held), mean of x1..x5")
         ax.set_ylabel("mean absolute\nerror [K]")
@@ -399,9 +296,9 @@ def prediction_error_figure(ctx: Context) -> Figure:
         if any_drawn:
             ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.0, 1.0), frameon=False)
         else:
-            _nothing(ax, "no scored predictions in this period (the log is shorter than "
+            nothing(ax, "no scored predictions in this period (the log is shorter than "
                      "the horizon, or predictions were not stored)")
-        _time_axis(ctx, ax, label=ax is axes[1])
+        time_axis(ctx, ax, label=ax is axes[1])
     fig.suptitle(f"Prediction error over time ({width / 60:g}-minute means), so drift "
                  "shows", fontsize=13, x=0.01, ha="left")
     return fig
@@ -434,7 +331,7 @@ def heat_figure(ctx: Context) -> Figure:
     ax.grid(True, axis="y", alpha=0.3)
     ax.yaxis.set_major_locator(MaxNLocator(nbins=8))
     if not days or all(d.heat_model_hours == 0 and d.heat_plant_kwh is None for d in days):
-        _nothing(ax, "no heat estimate stored")
+        nothing(ax, "no heat estimate stored")
     fig.suptitle("Heat into the room per day by term (negative: heat leaving the room)"
                  + ("; hatched: the simulated plant's own" if plant else ""),
                  fontsize=13, x=0.01, ha="left")
@@ -474,5 +371,5 @@ def draw_figures(history: History, kpis: Kpis, errors: PredictionErrors,
     out = []
     for fig_id, title, caption, draw in FIGURES:
         fig = draw(ctx)
-        out.append(ReportFigure(fig_id, title, caption, _png(fig, dpi)))
+        out.append(ReportFigure(fig_id, title, caption, png(fig, dpi)))
     return out
