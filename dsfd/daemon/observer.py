@@ -48,7 +48,7 @@ class StatePrediction:
         Predicted mean cavity speed over the step, unsigned (the anemometer reads |v|).
     heat_w : dict
         Step-average heat into the room by term: ``q_cv_rd``, ``q_sol_trans``, ``q_air``,
-        ``q_da`` [W] (physics §12, errata E2).
+        ``q_da`` [W] (docs/model.md#room-heat).
     """
 
     x_k: np.ndarray

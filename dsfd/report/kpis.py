@@ -32,7 +32,7 @@ __all__ = ["HEAT_TERMS", "STATES", "Kpis", "PredictionErrors", "compute_kpis", "
            "prediction_errors", "report_step_s", "zone_name"]
 
 STATES = ("x1", "x2", "x3", "x4", "x5")
-#: Room-side heat terms: key, label (physics §12).
+#: Room-side heat terms: key, label (docs/model.md#room-heat).
 HEAT_TERMS: tuple[tuple[str, str], ...] = (
     ("q_cv_rd", "Q_cv,rd convection + long-wave"), ("q_sol_trans", "Q_sol transmitted solar"),
     ("q_air", "Q_air ventilation air"), ("q_da", "Q_DA daylight credit"))
