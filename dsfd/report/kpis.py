@@ -236,9 +236,14 @@ def _at_bound(history: History, config: Mapping[str, Any] | None, end_s: float
     if not len(p) or config is None:
         return out
     offset_bound = _get(config, "calibration", "offset_bound_wm2")
-    until = np.append(p.time_s[1:], max(end_s, p.time_s[-1]))
-    start = max(float(p.time_s[0]), float(history.time_s[0]))
-    durations = np.clip(until, start, None) - np.clip(p.time_s, start, None)
+    # A row is in force until the next one, but not past the last cycle of its run (the
+    # time the daemon was down is no time at a bound).
+    run_end = {int(r): float(history.time_s[history.run_id == r].max())
+               for r in np.unique(history.run_id)}
+    ends = np.array([run_end.get(int(r), end_s) for r in p.run_id])
+    until = np.minimum(np.append(p.time_s[1:], np.inf), ends)
+    start = float(history.time_s[0])
+    durations = np.clip(until - np.clip(p.time_s, start, None), 0.0, None)
     for name, values in p.values.items():
         bounds = _get(config, "parameters", name)
         if isinstance(bounds, Mapping):

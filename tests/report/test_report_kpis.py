@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 
 from dsfd.cli import main
-from tests.daemon.harness import query
+from tests.daemon.harness import query, write_panel
 from tests.report.conftest import CYCLES
 
 J_PER_KWH = 3.6e6
@@ -83,3 +83,47 @@ def test_report_options_and_errors(faulted_run, tmp_path, capsys):
     assert main(["report", "--state-dir", str(faulted_run.state_dir), "--out", str(out),
                  "--since", "yesterday"]) == 2
     assert not out.exists()
+    # --config finds the state directory as dsfd run does (daemon.state_directory here).
+    panel = write_panel(tmp_path / "p.yaml", devices=False,
+                        extra={"daemon": {"state_directory": str(faulted_run.state_dir)}})
+    assert main(["report", "--config", str(panel), "--out", str(out), "--dpi", "30"]) == 0
+    assert out.read_text().count("<img ") == 6
+    other = write_panel(tmp_path / "q.yaml", devices=False, extra={
+        "panel": {"id": "north"}, "daemon": {"state_directory": str(faulted_run.state_dir)}})
+    assert main(["export", "--config", str(other), "--out", str(tmp_path / "m.csv")]) == 2
+    assert "holds panel 'suwon-south', not 'north'" in capsys.readouterr().err
+
+
+def synthetic_history(times_s, run_ids, param_times, param_runs, h_out):
+    """A History of bare cycles with a parameter history of h_out (pure-logic tests)."""
+    from pathlib import Path
+
+    import numpy as np
+
+    from dsfd.storage.history import History, ParameterHistory
+    from dsfd.storage.timeseries import MODEL_COLUMNS
+
+    n = len(times_s)
+    dec = {k: np.full(n, np.nan) for k in ("phi_deg", "afr", "or_pct", "decide_ms")}
+    dec.update(method=np.full(n, "mpc", object), write_status=np.full(n, "verified", object))
+    params = ParameterHistory(np.asarray(param_times, float), np.asarray(param_runs),
+                              np.array(["online"] * len(param_times), object),
+                              {"h_out": np.asarray(h_out, float)})
+    return History(Path("x"), 2, (), np.asarray(times_s, float), np.asarray(run_ids),
+                   np.arange(n), dec, {}, {}, {c: np.full(n, np.nan) for c, _ in MODEL_COLUMNS},
+                   params)
+
+
+def test_time_at_a_bound_ends_with_the_run_not_at_the_next_start():
+    from dsfd.report.kpis import compute_kpis
+
+    # Run 1: cycles 0..30 min; h_out at its lower bound 3 from minute 10 to the run's end.
+    # Run 2 starts two hours later with h_out at the bound again until its end (+15 min).
+    t = [*range(0, 1801, 60), *range(9000, 9901, 60)]
+    runs = [1] * 31 + [2] * 16
+    h = synthetic_history(t, runs, [0, 600, 9000], [1, 1, 2], [12.0, 3.0, 3.0])
+    config = {"parameters": {"h_out": {"lower": 3.0, "upper": 40.0, "default": 12.0}},
+              "model": {"step_s": 60.0}, "site": {"utc_offset_h": 0.0}}
+    at = compute_kpis(h, config).at_bound
+    assert [(a["parameter"], a["bound"]) for a in at] == [("h_out", "lower")]
+    assert math.isclose(at[0]["hours"], (1200 + 900) / 3600)  # not the 2 h between runs
