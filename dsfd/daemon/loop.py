@@ -366,7 +366,8 @@ class Controller:
             return None
         try:
             return horizon_end(self.observer.model, self.optics, forecast, estimate.x_k,
-                               applied, self.calibration.theta, self.calibration.offsets)
+                               applied, self.calibration.theta, self.calibration.offsets,
+                               coupling_tol_k=self.cfg.control.screening_tolerance_k)
         except (ValueError, ArithmeticError, np.linalg.LinAlgError):
             log.exception("horizon prediction failed")
             return None
