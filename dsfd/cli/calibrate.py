@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from dsfd.cli.progress import Progress
 from dsfd.config import ConfigError, load_panel
 from dsfd.measured import (
     MeasuredData,
@@ -31,24 +32,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--passes", type=int, default=1,
                    help="re-run the observer with the fitted θ and refit this many times")
     p.set_defaults(handler=run)
-
-
-class ProgressBar:
-    """A one-line progress bar on stderr (redrawn in place)."""
-
-    def __init__(self, label: str, width: int = 30) -> None:
-        self.label, self.width = label, width
-
-    def __call__(self, done: int, total: int, cost: float) -> None:
-        frac = min(done / max(total, 1), 1.0)
-        bar = "#" * round(frac * self.width)
-        sys.stderr.write(f"\r{self.label} [{bar:<{self.width}}] {done}/{total} "
-                         f"cost {cost:.4g}   ")
-        sys.stderr.flush()
-
-    def close(self) -> None:
-        sys.stderr.write("\n")
-        sys.stderr.flush()
 
 
 def select_rows(data: MeasuredData, start: str | None, end: str | None) -> MeasuredData:
@@ -95,10 +78,11 @@ def run(args: argparse.Namespace) -> int:
           f"{iso_utc(steps.time_s[0])} to {iso_utc(steps.time_s[-1])})")
     for note in steps.notes:
         print(f"  note: {note}")
-    bar = ProgressBar("fitting")
+    bar = Progress("fitting")
     try:
         state, fit = offline_fit(model, steps, max_nfev=args.max_nfev, passes=args.passes,
-                                 progress=bar)
+                                 progress=lambda done, total, cost: bar(done, total,
+                                                                        f"cost {cost:.4g}"))
     finally:
         bar.close()
     se = state.std_error(space)

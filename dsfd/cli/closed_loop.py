@@ -9,11 +9,12 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
-import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from dsfd.cli.progress import Progress
 from dsfd.config.panel import PanelConfig
 from dsfd.measured import iso_utc, parse_iso_utc
 from dsfd.weather import WeatherSeries
@@ -42,6 +43,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="add this to the measured outdoor air [K]: a synthetic warmer (or "
                    "colder) period on real irradiance; the report says so")
     g.add_argument("--start", default=None, help="UTC start, e.g. 2022-01-01T00:00:00Z")
+    g.add_argument("--report", type=Path, default=None, metavar="OUT.html",
+                   help="also write the run's dsfd report (the daemon's log of the closed loop, "
+                   "with the plant's own heat); needs pip install 'dsfd[report]'")
     g.add_argument("--fidelity", choices=("full", "lumped"), default="full",
                    help="truth plant switches: full stratified plant (default) or its lumped "
                    "equivalent with realistic sensors and actuators (fast)")
@@ -50,7 +54,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def check(args: argparse.Namespace) -> str | None:
     """Why the closed-loop options cannot run, or None."""
     if args.controller is None:
-        closed_only = ("params", "mode", "room_c", "start")
+        closed_only = ("params", "mode", "room_c", "start", "report")
         used = [n for n in closed_only if getattr(args, n) is not None]
         if used or args.t_out_offset_k or args.fidelity != "full":
             return "closed-loop options need --controller"
@@ -59,6 +63,14 @@ def check(args: argparse.Namespace) -> str | None:
         return "--controller needs --plant truth"
     if args.csv is not None:
         return "--csv is for open-loop truth runs"
+    if args.report is not None and args.controller == "fixed":
+        return "--report needs a controller that runs the daemon's cycle (not fixed)"
+    if args.report is not None:
+        from dsfd.cli.report import report_available
+
+        missing = report_available()
+        if missing:
+            return f"--report: {missing}"
     if args.calibration == "offline" and args.params is None \
             and args.controller not in ("fixed", "oracle"):
         return "--calibration offline needs --params PARAMS.yaml (made by dsfd calibrate)"
@@ -106,13 +118,11 @@ def run(args: argparse.Namespace, cfg: PanelConfig, series: WeatherSeries,
         controller=args.controller, calibration=args.calibration, seed=args.seed, hours=hours,
         start_s=None if args.start is None else parse_iso_utc(args.start),
         offline_theta=offline, fixed_command=fixed, options=options)
-    tty = sys.stderr.isatty()
-
-    def progress(i: int, n: int) -> None:
-        if tty and (i % 60 == 0 or i == n):
-            print(f"\r  {i}/{n} cycles", end="" if i < n else "\n", file=sys.stderr)
-
-    result = run_closed_loop(cfg, series, settings, progress=progress)
+    bar = Progress("closed loop, cycles")
+    with tempfile.TemporaryDirectory(prefix="dsfd-closed-loop-") as tmp:
+        result = run_closed_loop(cfg, series, settings, progress=bar, state_dir=Path(tmp))
+        if args.report is not None:
+            write_closed_loop_report(Path(tmp), cfg, args.report)
     s = result.summary()
     end = result.start_s + result.cycles * result.step_s
     print(f"dsfd simulate — panel {cfg.panel.id}, truth plant (seed {args.seed}), closed loop: "
@@ -154,3 +164,14 @@ def run(args: argparse.Namespace, cfg: PanelConfig, series: WeatherSeries,
         args.json.write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
         print(f"wrote {args.json}")
     return 0
+
+
+def write_closed_loop_report(state_dir: Path, cfg: PanelConfig, out: Path) -> None:
+    """The dsfd report of a closed loop's state directory, written to ``out``."""
+    from dsfd.report import build_report, write_report
+    from dsfd.storage.history import read_history
+
+    report = build_report(read_history(state_dir), panel=cfg)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    write_report(report, out)
+    print(f"wrote {out} (dsfd report of the {len(report.history)} cycles)")

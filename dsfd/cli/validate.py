@@ -5,10 +5,12 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from dsfd.cli.calibrate import select_rows
+from dsfd.cli.progress import Progress
 from dsfd.config import ConfigError, load_panel
 from dsfd.measured import iso_utc
 from dsfd.storage.measured_csv import read_measured
@@ -54,34 +56,28 @@ def _horizons(text: str) -> tuple[int, ...]:
     return values
 
 
-class _Progress:
-    def __init__(self) -> None:
-        self.last = -1
+def _replay_progress() -> Callable[[int, int, int], None]:
+    bar = Progress("replay")
+    return lambda row, rows, updates: bar(row, rows, f"{updates} updates")
 
-    def __call__(self, row: int, rows: int, updates: int) -> None:
-        pct = int(100 * row / max(rows, 1))
-        if pct != self.last:
-            self.last = pct
-            bar = "#" * (pct * 30 // 100)
-            sys.stderr.write(f"\rreplay [{bar:<30}] {pct:3d}% ({updates} updates)")
-            sys.stderr.flush()
-            if row == rows:
-                sys.stderr.write("\n")
+
+#: Width of a model's column: its full name and a space.
+COLUMN = max(len(label) for _, label in MODELS) + 2
 
 
 def _cell(value: float | None, scale: float = 1.0) -> str:
-    return f"{value * scale:10.2f}" if value is not None else f"{'-':>10}"
+    return f"{value * scale:{COLUMN}.2f}" if value is not None else f"{'-':>{COLUMN}}"
 
 
 def print_tables(scores: ReplayScores, models: list[tuple[str, str]],
                  horizons: tuple[int, ...], step_s: float) -> None:
     """Table 2 (states) per horizon and Table 1 (cavity speed per regime)."""
-    head = "".join(f"{label[:10]:>10}" for _, label in models)
+    head = "".join(f"{label:>{COLUMN}}" for _, label in models)
     states = list(scores.measured_mean_c)  # the states measured, x1..x5 in order
     for h in horizons:
         print(f"\nTable 2 — mean absolute difference, predicted {h} step(s) = "
               f"{h * step_s / 60:g} min ahead vs measured [degC]")
-        print(f"{'state':<8}{head}{'measured':>10}")
+        print(f"{'state':<8}{head}{'measured':>{COLUMN}}")
         for s in [*states, "mean"]:
             meas = (sum(scores.measured_mean_c[x] for x in states) / len(states)
                     if s == "mean" and states else scores.measured_mean_c.get(s))
@@ -92,7 +88,7 @@ def print_tables(scores: ReplayScores, models: list[tuple[str, str]],
     if regimes:
         print("\nTable 1 — mean absolute difference of the cavity speed |v|, one step ahead "
               "[cm/s]")
-        print(f"{'regime':<8}{head}{'measured':>10}{'samples':>9}")
+        print(f"{'regime':<8}{head}{'measured':>{COLUMN}}{'samples':>9}")
         for r in regimes:
             v = scores.velocity[r]
             row = "".join(_cell(v.mae_cms.get(m)) for m, _ in models)
@@ -110,7 +106,7 @@ def print_paired(scores: ReplayScores, others: list[str], horizons: tuple[int, .
     print("\nSelf-calibrating minus other model, paired difference of the absolute errors "
           "± standard error (batch means) [mK]; negative: self-calibrating better, "
           "|diff| < 2 se: not distinguishable on this record")
-    print(f"{'state':<8}" + "".join(f"{f'{m[:9]} h{h}':>20}" for h in horizons for m in others))
+    print(f"{'state':<8}" + "".join(f"{f'vs {m} h{h}':>20}" for h in horizons for m in others))
     for s in states:
         cells = []
         for h in horizons:
@@ -159,7 +155,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"  not measured (skipped): {', '.join(missing)}")
     out = replay_scores(cfg, steps, offline_theta=offline, horizons=horizons,
                         warmup_h=args.warmup_h, online=not args.no_online,
-                        progress=None if args.no_online else _Progress())
+                        progress=None if args.no_online else _replay_progress())
     models = [(m, label) for m, label in MODELS
               if m in out.scored_models()]
     print(f"scored {out.scored_starts} start rows; self-calibration updates: "

@@ -8,6 +8,7 @@ YAML shape (the ``daemon:`` section of a panel file; every key is optional)::
       calibrate_budget_s: 10
       store_budget_s: 5
       room_temperature_source: auto  # auto | sensor | config
+      metrics_file: null             # e.g. /var/lib/node_exporter/textfile_collector/x.prom
       quality:
         stuck_window: 15
         max_rate_k_per_min: 10.0
@@ -98,3 +99,15 @@ class DaemonSettings:
         "prediction for at most this many cycles; then the optimiser lacks it", ge=0, le=1440)
     quality: QualitySettings = setting(default_factory=QualitySettings,
                                        doc="Sensor quality checks")
+    metrics_file: str | None = setting(
+        None, doc="Prometheus metrics of the panel, rewritten atomically after every cycle in "
+        "the text exposition format for node_exporter's textfile collector (e.g. "
+        "/var/lib/node_exporter/textfile_collector/dsfd-suwon-south.prom); null: off. Needs "
+        "prometheus_client: pip install 'dsfd[metrics]'")
+
+    def check(self) -> list[Problem]:
+        if self.metrics_file is not None and not self.metrics_file.endswith(".prom"):
+            return [Problem("metrics_file", self.metrics_file,
+                            "must end in .prom (node_exporter's textfile collector reads only "
+                            "*.prom files)")]
+        return []

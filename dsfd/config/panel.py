@@ -34,6 +34,15 @@ REGIME_OPENINGS: dict[int, frozenset[str]] = {
     9: frozenset({"exterior_bottom", "exterior_top", "interior_bottom", "interior_top"}),
     10: frozenset(),
 }
+#: What each commanded airflow regime does (docs/model.md#regimes; the dampers set
+#: the path, the pressures the direction, so 1/2, 3/4, 5/8 and 6/7 share damper sets).
+REGIME_NAMES: dict[int, str] = {
+    1: "room air up the cavity", 2: "room air down the cavity",
+    3: "outdoor air curtain up", 4: "outdoor air curtain down",
+    5: "exhaust room→IB→ET→out", 6: "exhaust room→IT→EB→out",
+    7: "supply out→EB→IT→room", 8: "supply out→ET→IB→room",
+    9: "all dampers open", 10: "closed",
+}
 
 
 @dataclass(frozen=True, kw_only=True)

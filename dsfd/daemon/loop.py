@@ -16,6 +16,9 @@ baseline, safety pipeline) and the two edges (drivers, store), timing every stag
   pipeline commands the safe state;
 * **safety** — :class:`~dsfd.daemon.safety.SafetyPipeline`, with the decision trace;
 * **write** — under the devices' write budget, verified by read-back (unless a dry run);
+* **predict** — the states at the end of the horizon with the applied position held (for
+  the report's multi-step prediction error; the one-step prediction and the room-side heat
+  of the step that ended come free with the observer's update);
 * **store** — one SQLite transaction per cycle under ``daemon.store_budget_s``.
 
 Worker threads (``asyncio.to_thread``, which copies the logging context) keep the event loop
@@ -29,9 +32,11 @@ import asyncio
 import logging
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, TypeVar
+
+import numpy as np
 
 from dsfd.config.devices import Devices
 from dsfd.config.panel import PanelConfig
@@ -42,7 +47,7 @@ from dsfd.control.paper_sqp import optimise_paper_sqp
 from dsfd.daemon.calibration import CalibrationStage, UpdateOutcome
 from dsfd.daemon.clock import Clock, Slot
 from dsfd.daemon.logging_setup import get_logger
-from dsfd.daemon.observer import STATE_SIGNALS, StateEstimate, StateObserver
+from dsfd.daemon.observer import STATE_SIGNALS, StateEstimate, StateObserver, horizon_end
 from dsfd.daemon.quality import QualityChecker, QualityReport
 from dsfd.daemon.record import cycle_record
 from dsfd.daemon.safety import SafetyContext, SafetyPipeline, SafetyResult
@@ -128,6 +133,16 @@ class CycleOutcome:
     timings_ms: dict[str, float] = field(default_factory=dict)
     manual_override: bool = False
     store_ok: bool = True
+    #: The state estimate of this cycle (with the observer's one-step prediction).
+    estimate: StateEstimate | None = None
+    #: The actuator position in effect from this cycle on: the command unless a dry run
+    #: left the actuators where they were read.
+    applied: Command | None = None
+    #: x1..x6 predicted at ``time_s + horizon_s`` with ``applied`` held [K].
+    horizon_x_k: np.ndarray | None = None
+    horizon_s: float = math.nan
+    #: A simulated plant's own heat into the room since its start, by term [J].
+    plant_heat_j: Mapping[str, float] | None = None
 
     @property
     def cycle_ms(self) -> float:
@@ -138,8 +153,11 @@ class Controller:
     """The cycle of one panel (drivers, clock and store given by the runner)."""
 
     def __init__(self, cfg: PanelConfig, *, driver: Driver, clock: Clock, store: Store,
-                 calibration: CalibrationStage, write_enabled: bool) -> None:
+                 calibration: CalibrationStage, write_enabled: bool,
+                 plant_heat_j: Callable[[], Mapping[str, float] | None] | None = None) -> None:
         self.driver = driver
+        #: A simulated plant's cumulative room heat by term [J] (None: real hardware).
+        self.plant_heat_j = plant_heat_j
         self.clock = clock
         self.store = store
         self.calibration = calibration
@@ -185,6 +203,7 @@ class Controller:
             self.observer.reset()  # the prediction spans one step; a gap restarts it
 
         sample, current, override = await self._read(now_s)
+        plant_heat = self.plant_heat_j() if self.plant_heat_j is not None else None
         t["read"] = _ms(t0)
         mark = time.perf_counter()
         report = self.quality.check(sample, age_s=t["read"] / 1e3)
@@ -203,8 +222,9 @@ class Controller:
         mark = time.perf_counter()
         heating = (None if weather.inputs is None
                    else is_heating(self.cfg.control, float(weather.inputs.t_out_k[0])))
+        forecast = None if weather.inputs is None else self._forecast(weather.inputs, now_s)
         decision, method, fallback, no_decision = await self._decide(
-            weather, estimate, current, checked, now_s, heating=bool(heating))
+            weather, estimate, current, checked, forecast, heating=bool(heating))
         t["decide"] = _ms(mark)
 
         mark = time.perf_counter()
@@ -221,14 +241,22 @@ class Controller:
         mark = time.perf_counter()
         write, status = await self._write(safe.command)
         t["write"] = _ms(mark)
-        self.calibration.set_controls(safe.command if status != "dry-run" else current)
+        applied = safe.command if status != "dry-run" else current
+        self.calibration.set_controls(applied)
+
+        mark = time.perf_counter()
+        horizon_x = self._horizon_end(estimate, forecast, applied)
+        t["predict"] = _ms(mark)
 
         outcome = CycleOutcome(
             cycle=self.cycles, slot=slot.index, skipped_slots=slot.skipped, time_s=now_s,
             method=method, command=safe.command, proposed=decision, fallback=fallback,
             heating=heating,
             safety=safe, write_status=status, write=write, quality=report,
-            calibration=calibration, timings_ms=t, manual_override=override)
+            calibration=calibration, timings_ms=t, manual_override=override,
+            estimate=estimate, applied=applied, horizon_x_k=horizon_x,
+            horizon_s=self.cfg.control.horizon_steps * self.cfg.model.step_s,
+            plant_heat_j=plant_heat)
         mark = time.perf_counter()
         outcome.store_ok = await self._store(outcome, weather)
         t["store"] = _ms(mark)
@@ -290,10 +318,10 @@ class Controller:
         return outcome
 
     async def _decide(self, weather: CycleWeather, estimate: StateEstimate,
-                      current: Command | None, checked: Sample, now_s: float, *,
+                      current: Command | None, checked: Sample, forecast: Forcing | None, *,
                       heating: bool) -> tuple[Decision | None, str, str, str]:
         """(decision, method, fallback reason, why no decision at all)."""
-        if weather.inputs is None or weather.forcing is None:
+        if weather.inputs is None or weather.forcing is None or forecast is None:
             why = "required weather not GOOD: " + ", ".join(
                 f"{n} ({checked.quality(n).value})" for n in weather.missing)
             return None, "safe", why, why
@@ -304,7 +332,7 @@ class Controller:
                 fallback = f"state estimate not usable: {estimate.why}"
             else:
                 problem = ControlProblem(
-                    x0=estimate.x_k, forcing=self._forecast(weather.inputs, now_s),
+                    x0=estimate.x_k, forcing=forecast,
                     theta=self.calibration.theta, heating=heating,
                     heat_offsets_wm2=self.calibration.offsets,
                     previous_phi_deg=None if current is None else current.phi_deg,
@@ -331,6 +359,18 @@ class Controller:
         """The façade boundary over the horizon from ``now_s``: persistence of the measured
         interval (a simulation's oracle overrides this with the true weather)."""
         return forecast_forcing(self.cfg, measured, start_s=now_s)
+
+    def _horizon_end(self, estimate: StateEstimate, forecast: Forcing | None,
+                     applied: Command | None) -> np.ndarray | None:
+        if forecast is None or applied is None or not estimate.usable:
+            return None
+        try:
+            return horizon_end(self.observer.model, self.optics, forecast, estimate.x_k,
+                               applied, self.calibration.theta, self.calibration.offsets,
+                               coupling_tol_k=self.cfg.control.screening_tolerance_k)
+        except (ValueError, ArithmeticError, np.linalg.LinAlgError):
+            log.exception("horizon prediction failed")
+            return None
 
     def _optimiser(self, problem: ControlProblem) -> Callable[[], Decision]:
         if self.cfg.control.optimiser == "paper-sqp":

@@ -24,13 +24,36 @@ from dsfd.estimation.observer import fill_state
 from dsfd.estimation.params import with_offsets
 from dsfd.physics.constants import T_ZERO
 from dsfd.physics.coupling import StepInputs
+from dsfd.physics.forcing import FacadeOptics, Forcing, step_inputs
 from dsfd.physics.model import LumpedModel
 
-__all__ = ["STATE_SIGNALS", "StateEstimate", "StateObserver"]
+__all__ = ["STATE_SIGNALS", "StateEstimate", "StateObserver", "StatePrediction", "horizon_end"]
 
 #: Sensors of x1..x5, in state order.
 STATE_SIGNALS: tuple[str, ...] = ("x1_c", "x2_c", "x3_c", "x4_c", "x5_c")
 _NEVER = 10**9  # age of a state never measured
+
+
+@dataclass(frozen=True)
+class StatePrediction:
+    """The model's one-step prediction of the step that just ended (from the previous
+    estimate, with the actuator position applied during the step and its measured weather):
+    what the reading of this cycle scores, and the room-side heat of that step.
+
+    Attributes
+    ----------
+    x_k : ndarray (6,), [K]
+        Predicted x1..x6 at this cycle.
+    v_cav_ms : float, [m/s]
+        Predicted mean cavity speed over the step, unsigned (the anemometer reads |v|).
+    heat_w : dict
+        Step-average heat into the room by term: ``q_cv_rd``, ``q_sol_trans``, ``q_air``,
+        ``q_da`` [W] (docs/model.md#room-heat).
+    """
+
+    x_k: np.ndarray
+    v_cav_ms: float
+    heat_w: dict[str, float]
 
 
 @dataclass(frozen=True)
@@ -47,12 +70,15 @@ class StateEstimate:
         Every x1..x5 measured or predicted within the allowed age: the optimiser may run.
     why : str
         Why not usable ("" if usable).
+    prediction : StatePrediction or None
+        The one-step prediction this estimate corrected (None: no previous estimate).
     """
 
     x_k: np.ndarray
     age_cycles: tuple[int, ...]
     usable: bool
     why: str = ""
+    prediction: StatePrediction | None = None
 
     def celsius(self, i: int) -> float | None:
         """State ``x{i+1}`` in degC, None if unknown."""
@@ -95,6 +121,7 @@ class StateObserver:
         y = np.array([y_c.get(n, np.nan) for n in STATE_SIGNALS], float) + T_ZERO
         measured = np.isfinite(y)
         x_pred = np.full(6, np.nan)
+        prediction = None
         if self._x is not None and step is not None and applied is not None:
             if offsets is not None:
                 step = with_offsets(step, offsets)
@@ -102,6 +129,11 @@ class StateObserver:
                                   theta)
             if np.all(np.isfinite(res.x_next)):
                 x_pred = res.x_next[0]
+                prediction = StatePrediction(
+                    x_pred.copy(), abs(float(res.v_cav_ms[0])),
+                    {"q_cv_rd": float(res.q_cv_rd_w[0]), "q_sol_trans": float(res.q_sol_w[0]),
+                     "q_air": float(res.q_air_w[0]),
+                     "q_da": float(np.broadcast_to(res.q_da_w, (1,))[0])})
         x = fill_state(y, x_pred, has_louver=self.has_louver,
                        gain=self.model.cfg.calibration.measurement_gain)
         predicted = np.isfinite(x[:5]) & ~measured
@@ -121,4 +153,26 @@ class StateObserver:
         else:
             why = ""
         self._x = x if np.all(np.isfinite(x)) else None
-        return StateEstimate(x, tuple(int(min(a, _NEVER)) for a in self._age), not why, why)
+        return StateEstimate(x, tuple(int(min(a, _NEVER)) for a in self._age), not why, why,
+                             prediction)
+
+
+def horizon_end(model: LumpedModel, optics: FacadeOptics, forecast: Forcing, x_k: np.ndarray,
+                applied: Command, theta: np.ndarray, offsets: np.ndarray, *,
+                coupling_tol_k: float | None = None) -> np.ndarray | None:
+    """x1..x6 at the end of the horizon [K] with ``applied`` held from ``x_k`` on the
+    ``forecast``, as the optimiser predicts it (same model, θ̂ and heat-flux offsets
+    [W/m2]); None if the rollout is not finite. One candidate, ``len(forecast)`` steps.
+
+    ``coupling_tol_k`` [K] loosens the thermal–airflow fixed point (the daemon passes the
+    optimiser's screening tolerance, 0.1 K: half the coupling evaluations, end states within
+    0.02 K of the strict rollout on the Suwon panel — far below the prediction errors this
+    is scored for)."""
+    loads = optics.loads(forecast, np.radians(applied.phi_deg))
+    inp = with_offsets(step_inputs(forecast, loads), offsets)
+    steps = forecast.time_s.shape[0]
+    traj = model.rollout(x_k, np.full((1, steps), applied.afr),
+                         np.full((1, steps), applied.or_pct / 100.0), inp, theta,
+                         coupling_tol_k=coupling_tol_k)
+    x_end = traj.x[0, -1]
+    return x_end if np.all(np.isfinite(x_end)) else None

@@ -6,6 +6,7 @@ import math
 from typing import TYPE_CHECKING, Any
 
 from dsfd.measured import iso_utc
+from dsfd.physics.constants import T_ZERO
 from dsfd.storage.timeseries import CycleRecord
 
 if TYPE_CHECKING:
@@ -63,8 +64,35 @@ def cycle_record(out: CycleOutcome, weather: CycleWeather, calibration: Calibrat
     for name in out.quality.recovered:
         events.append(("info", "sensor_recovered", name))
     return CycleRecord(cycle=out.cycle, time_s=out.time_s, samples=samples, decision=decision,
-                       parameters=params, events=events)
+                       parameters=params, events=events, model=model_row(out))
+
+
+def model_row(out: CycleOutcome) -> dict[str, Any]:
+    """The ``model`` table's row of one cycle (units as in the column names; NULL unknown)."""
+    row: dict[str, Any] = {}
+    est = out.estimate
+    if est is not None:
+        row.update(_celsius("est", est.x_k, 6))
+        pred = est.prediction
+        if pred is not None:
+            row.update(_celsius("pred", pred.x_k, 5))
+            row["pred_v_cav_ms"] = _finite(pred.v_cav_ms)
+            row.update({f"{k}_w": _finite(v) for k, v in pred.heat_w.items()})
+    if out.horizon_x_k is not None:
+        row["horizon_s"] = out.horizon_s
+        row.update(_celsius("hz", out.horizon_x_k, 5))
+    if out.applied is not None:
+        row.update(applied_phi_deg=float(out.applied.phi_deg), applied_afr=int(out.applied.afr),
+                   applied_or_pct=float(out.applied.or_pct))
+    if out.plant_heat_j is not None:
+        row.update({f"plant_{k}_j": _finite(v) for k, v in out.plant_heat_j.items()})
+    return row
+
+
+def _celsius(prefix: str, x_k: Any, n: int) -> dict[str, float | None]:
+    return {f"{prefix}_x{i + 1}_c": _finite(float(x_k[i]) - T_ZERO) for i in range(n)}
 
 
 def _finite(value: float) -> float | None:
+    value = float(value)
     return value if math.isfinite(value) else None

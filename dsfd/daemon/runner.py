@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import asyncio
 import dataclasses
+import logging
 import os
 import signal
 import tempfile
@@ -35,6 +36,7 @@ from dsfd.daemon.loop import (
     Controller,
     CycleOutcome,
 )
+from dsfd.daemon.metrics import MetricsFile, metrics_problem
 from dsfd.daemon.notify import Notifier
 from dsfd.daemon.summary import RunSummary
 from dsfd.drivers.base import Driver
@@ -67,6 +69,10 @@ class PlantUnderTest(Protocol):
 
     def room_heat(self) -> tuple[dict[str, float], float]:
         """Heat into the room since the start [J] by term, and the hours it covers."""
+        ...
+
+    def room_heat_now(self) -> dict[str, float] | None:
+        """The same by term [J] now, None while the plant is busy integrating (per cycle)."""
         ...
 
 
@@ -138,6 +144,9 @@ def runtime_problems(cfg: PanelConfig, *, simulated_plant: bool, dry_run: bool
         out.append(ConfigIssue("daemon.cycle_period_s", d.cycle_period_s,
                                f"the stage budgets do not fit into one cycle ({shown} = "
                                f"{sum(parts.values()):g} s)"))
+    metrics = metrics_problem(d.metrics_file)
+    if metrics:
+        out.append(ConfigIssue("daemon.metrics_file", d.metrics_file, metrics))
     if simulated_plant:
         return out
     if dev is None:
@@ -198,6 +207,8 @@ class _Daemon:
         self.summary = RunSummary(panel=cfg.panel.id, mode=opts.mode)
         self.cycle_failures = 0
         self.reloads_rejected = 0
+        self.metrics = _metrics_file(cfg)
+        self.metrics_failures = 0
 
     async def wait_until(self, deadline_s: float) -> None:
         """Sleep until the deadline, or until a signal asks to stop or reload."""
@@ -243,6 +254,7 @@ class _Daemon:
         if out.store_ok:
             for integration in self.integrations:
                 integration.cycle_stored(out.cycle)
+        self.write_metrics(out)
         if self.opts.on_cycle is not None:
             self.opts.on_cycle(out)
         c = out.command
@@ -258,6 +270,24 @@ class _Daemon:
         self.notifier.watchdog(f"cycle {out.cycle}: {out.method}, louver {c.phi_deg:+.0f} deg, "
                                f"regime {c.afr}, dampers {c.or_pct:g} %, "
                                f"write {out.write_status}")
+
+    def write_metrics(self, out: CycleOutcome) -> None:
+        """Rewrite the metrics file; a failure is logged (loudly once), never fatal."""
+        if self.metrics is None:
+            return
+        try:
+            self.metrics.update(out, self.controller.calibration)
+            self.metrics.write()
+        except Exception as exc:  # metrics must never stop the control of the panel
+            self.metrics_failures += 1
+            log.log(logging.WARNING if self.metrics_failures == 1 else logging.DEBUG,
+                    "metrics file %s not written: %s: %s", self.metrics.path,
+                    type(exc).__name__, exc, failures=self.metrics_failures)
+        else:
+            if self.metrics_failures:
+                log.info("metrics file written again after %d failure(s)",
+                         self.metrics_failures)
+            self.metrics_failures = 0
 
     def do_reload(self) -> None:
         self.notifier.reloading()
@@ -293,12 +323,19 @@ class _Daemon:
                 daemon=dataclasses.replace(new.daemon,
                                            state_directory=self.cfg.daemon.state_directory))
         note = self.controller.reconfigure(new)
+        if new.daemon.metrics_file != self.cfg.daemon.metrics_file:
+            self.metrics = _metrics_file(new)
         self.cfg = new
         log.info("configuration reloaded", file=str(path), calibration=note,
                  after_cycle=self.controller.cycles)
         self.store.event(cycle=self.controller.cycles, time_s=self.clock.wall(), level="info",
                          kind="reload", message=f"{path}: {note}")
         self.notifier.ready("configuration reloaded")
+
+
+def _metrics_file(cfg: PanelConfig) -> MetricsFile | None:
+    path = cfg.daemon.metrics_file
+    return None if path is None else MetricsFile(path, cfg.panel.id)
 
 
 #: glibc's ``M_ARENA_MAX`` parameter of ``mallopt(3)``.
@@ -351,7 +388,7 @@ async def serve(opts: RunOptions, cfg: PanelConfig, *, state_dir: Path,
         driver = build_drivers(cfg.devices, clock=clock.monotonic)
     store = Store.open(state_dir)
     store.begin_run(panel=cfg.panel.id, mode=opts.mode, version=__version__,
-                    config_path=str(opts.config_path))
+                    config_path=str(opts.config_path), config=dataclasses.asdict(cfg))
     if store.moved_aside is not None:
         log.error("database was unusable and was moved aside; started a new one",
                   moved_to=str(store.moved_aside))
@@ -362,7 +399,8 @@ async def serve(opts: RunOptions, cfg: PanelConfig, *, state_dir: Path,
     # A dry run never writes to hardware; an in-process simulated plant may follow.
     write_enabled = not opts.dry_run or not getattr(driver, "hardware", True)
     controller = Controller(cfg, driver=driver, clock=clock, store=store,
-                            calibration=calibration, write_enabled=write_enabled)
+                            calibration=calibration, write_enabled=write_enabled,
+                            plant_heat_j=None if plant is None else plant.room_heat_now)
     daemon = _Daemon(opts, cfg, clock, driver, store, controller, notifier, integrations)
     daemon.summary.start_calibration(calibration)
     loop = asyncio.get_running_loop()

@@ -11,6 +11,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
+from dsfd.config.panel import REGIME_NAMES
 from dsfd.daemon.loop import CycleOutcome
 
 if TYPE_CHECKING:
@@ -18,15 +19,6 @@ if TYPE_CHECKING:
 
 __all__ = ["REGIME_NAMES", "RunSummary"]
 
-#: What each commanded airflow regime does (docs/model.md#regimes; the dampers set
-#: the path, the pressures the direction, so 1/2, 3/4, 5/8 and 6/7 share damper sets).
-REGIME_NAMES: dict[int, str] = {
-    1: "room air up the cavity", 2: "room air down the cavity",
-    3: "outdoor air curtain up", 4: "outdoor air curtain down",
-    5: "exhaust room→IB→ET→out", 6: "exhaust room→IT→EB→out",
-    7: "supply out→EB→IT→room", 8: "supply out→ET→IB→room",
-    9: "all dampers open", 10: "closed",
-}
 #: Heat flows into the room reported by the simulated plant, and how they are printed.
 _HEAT_LABELS = {"q_sol_trans": "solar transmitted", "q_cv_rd": "convection+long-wave",
                 "q_air": "ventilation air", "q_da": "daylight credit"}

@@ -59,7 +59,7 @@ from dsfd.physics.boundary import WeatherInputs
 from dsfd.physics.constants import T_ZERO
 from dsfd.physics.forcing import Forcing, facade_forcing
 from dsfd.physics.model import LumpedModel
-from dsfd.physics.solar import extraterrestrial_irradiance, solar_position
+from dsfd.physics.solar import solar_position
 from dsfd.sim.plant.actuators import Command
 from dsfd.sim.plant.config import PlantOptions
 from dsfd.sim.plant.model import ROOM_FLOWS
@@ -67,6 +67,7 @@ from dsfd.sim.plant.plant import Plant
 from dsfd.sim.replay import at_site, step_window
 from dsfd.storage.timeseries import Store
 from dsfd.weather import WeatherSeries
+from dsfd.weather.sky import sky_conditions
 
 __all__ = ["CALIBRATIONS", "CONTROLLERS", "ClosedLoopResult", "ClosedLoopSettings",
            "run_closed_loop"]
@@ -165,12 +166,7 @@ class ClosedLoopResult:
         the clearness index k_t = GHI / (E_0 cos z): ``clear`` (> 0.55), ``overcast``
         (< 0.3) or ``mixed`` — the classes of the paper's Figure 11."""
         t = self.start_s + (np.arange(self.cycles) + 0.5) * self.step_s
-        sun = solar_position(t, latitude_deg, longitude_deg)
-        cos_z = np.cos(np.radians(sun.zenith_deg))
-        kt = self.ghi_wm2 / np.maximum(extraterrestrial_irradiance(t) * cos_z, 1e-9)
-        night = (sun.elevation_deg < 5.0) | (self.ghi_wm2 < 20.0)
-        return np.where(night, "night", np.where(kt > 0.55, "clear",
-                                                 np.where(kt < 0.3, "overcast", "mixed")))
+        return sky_conditions(t, self.ghi_wm2, latitude_deg, longitude_deg)
 
     def by_condition(self, latitude_deg: float, longitude_deg: float) -> dict:
         """Per sky condition: cycles, regime shares, mean louver angle [deg], and for clear
@@ -259,8 +255,12 @@ def _controller_config(cfg: PanelConfig, controller: str) -> PanelConfig:
 
 
 def run_closed_loop(cfg: PanelConfig, series: WeatherSeries, settings: ClosedLoopSettings, *,
-                    progress: Callable[[int, int], None] | None = None) -> ClosedLoopResult:
+                    progress: Callable[[int, int], None] | None = None,
+                    state_dir: Path | None = None) -> ClosedLoopResult:
     """Run one controller against the truth plant on ``series`` (any site: replayed here).
+
+    The daemon's cycle stores everything in ``state_dir`` as ``dsfd run`` does (for ``dsfd
+    report``); by default a temporary directory, removed at the end.
 
     Raises
     ------
@@ -280,6 +280,8 @@ def run_closed_loop(cfg: PanelConfig, series: WeatherSeries, settings: ClosedLoo
     plant = Plant(cfg, settings.options, seed=settings.seed, weather_series=site)
     plant.reset(start, command=settings.fixed_command if settings.controller == "fixed"
                 else None)
+    if state_dir is not None:
+        return asyncio.run(_run(cfg, plant, settings, start, n, state_dir, progress))
     with tempfile.TemporaryDirectory(prefix="dsfd-closed-loop-") as tmp:
         return asyncio.run(_run(cfg, plant, settings, start, n, Path(tmp), progress))
 
@@ -303,11 +305,13 @@ async def _run(cfg: PanelConfig, plant: Plant, settings: ClosedLoopSettings, sta
     clock = SimulatedClock(start_utc_s=start)
     driver = SimulatedDriver(plant)
     store = Store.open(state_dir)
-    store.begin_run(panel=cfg.panel.id, mode="closed-loop simulation", version="sim",
-                    config_path=None)
+    store.begin_run(panel=cfg.panel.id, mode=f"closed-loop simulation, controller "
+                    f"{settings.controller}, calibration {settings.calibration}",
+                    version="sim", config_path=None, config=dataclasses.asdict(ctrl_cfg))
     cls = _OracleController if settings.controller == "oracle" else Controller
     controller = cls(ctrl_cfg, driver=driver, clock=clock, store=store,
-                     calibration=calibration, write_enabled=True)
+                     calibration=calibration, write_enabled=True,
+                     plant_heat_j=plant.room_heat_j)
     if isinstance(controller, _OracleController):
         controller.plant = plant
     heat: dict[str, list[float]] = {k: [] for k in ROOM_FLOWS}

@@ -56,6 +56,11 @@ class SimulatedPlant:
         """Heat into the room since the start [J] by term, and the hours it covers [h]."""
         return self.plant.room_heat_j(), (self.plant.time_s - self.start_s) / 3600.0
 
+    def room_heat_now(self) -> dict[str, float] | None:
+        """Heat into the room since the start [J] by term; None while an integration that
+        the read budget abandoned is still running (the plant is not thread-safe)."""
+        return None if self.driver.busy else self.plant.room_heat_j()
+
 
 def weather_window(cfg: PanelConfig, *, weather: str = DEFAULT_WEATHER,
                    start_s: float | None = None) -> tuple[WeatherSeries, float]:

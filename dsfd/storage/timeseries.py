@@ -33,6 +33,7 @@ from dsfd.config.panel import PARAMETER_NAMES
 __all__ = [
     "DB_NAME",
     "MIGRATIONS",
+    "MODEL_COLUMNS",
     "MQTT_CURSOR_TABLE",
     "SCHEMA_VERSION",
     "CycleRecord",
@@ -41,7 +42,7 @@ __all__ = [
 ]
 
 DB_NAME = "timeseries.sqlite"
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
 #: Schema changes, in order: ``MIGRATIONS[v]`` is the SQL script that takes a database of
 #: version ``v - 1`` to ``v`` (``ALTER TABLE … ADD COLUMN``; new tables come from
 #: :data:`SCHEMA`, whose ``CREATE … IF NOT EXISTS`` always describes the newest version).
@@ -70,7 +71,28 @@ CREATE TABLE IF NOT EXISTS mqtt_cursor (
 """
 MIGRATIONS: dict[int, str] = {
     2: MQTT_CURSOR_TABLE,  # the MQTT delivery cursor and broker state (issue 22)
+    # 3: the model's view of every cycle (table ``model``, from SCHEMA) and the panel
+    # configuration of each run, for ``dsfd report`` and ``dsfd export`` (issue 21).
+    3: "ALTER TABLE runs ADD COLUMN config_json TEXT",
 }
+
+_STATES = ("x1", "x2", "x3", "x4", "x5")
+_HEAT_TERMS = ("q_cv_rd", "q_sol_trans", "q_air", "q_da")
+#: Columns of the ``model`` table after ``run_id, cycle, time_s`` (one row per cycle; meaning
+#: and units in docs/storage-schema.md): state estimate, one-step prediction of this cycle's
+#: readings, the model's room-side heat over the step that ended, the horizon-end prediction,
+#: the actuator position in effect from this cycle on, the simulated plant's own room heat.
+MODEL_COLUMNS: tuple[tuple[str, str], ...] = (
+    *((f"est_{s}_c", "REAL") for s in (*_STATES, "x6")),
+    *((f"pred_{s}_c", "REAL") for s in _STATES),
+    ("pred_v_cav_ms", "REAL"),
+    *((f"{q}_w", "REAL") for q in _HEAT_TERMS),
+    ("horizon_s", "REAL"),
+    *((f"hz_{s}_c", "REAL") for s in _STATES),
+    ("applied_phi_deg", "REAL"), ("applied_afr", "INTEGER"), ("applied_or_pct", "REAL"),
+    *((f"plant_{q}_j", "REAL") for q in _HEAT_TERMS),
+)
+_MODEL_DDL = ",\n    ".join(f"{name} {kind}" for name, kind in MODEL_COLUMNS)
 
 _PARAM_COLUMNS = ", ".join(f"{name} REAL" for name in PARAMETER_NAMES)
 SCHEMA = f"""
@@ -88,7 +110,8 @@ CREATE TABLE IF NOT EXISTS runs (
     config_path TEXT,
     ended_utc TEXT,
     end_reason TEXT,
-    cycles INTEGER
+    cycles INTEGER,
+    config_json TEXT
 );
 CREATE TABLE IF NOT EXISTS samples (
     run_id INTEGER NOT NULL REFERENCES runs(run_id),
@@ -146,6 +169,13 @@ CREATE TABLE IF NOT EXISTS events (
     kind TEXT NOT NULL,
     message TEXT NOT NULL
 );
+CREATE TABLE IF NOT EXISTS model (
+    run_id INTEGER NOT NULL REFERENCES runs(run_id),
+    cycle INTEGER NOT NULL,
+    time_s REAL NOT NULL,
+    {_MODEL_DDL},
+    PRIMARY KEY (run_id, cycle)
+);
 """ + MQTT_CURSOR_TABLE
 
 
@@ -173,7 +203,8 @@ class CycleRecord:
     ``samples``: (signal, value or None, quality, detail); ``decision``: column → value of the
     ``decisions`` table; ``parameters``: (source, estimate by name, cost, detail) when the
     parameters changed this cycle (names beyond θ, e.g. the calibrator's heat-flux offsets,
-    go into the JSON column ``other``); ``events``: (level, kind, message).
+    go into the JSON column ``other``); ``events``: (level, kind, message); ``model``: column
+    → value of the ``model`` table (:data:`MODEL_COLUMNS`; absent ones are NULL).
     """
 
     cycle: int
@@ -182,6 +213,7 @@ class CycleRecord:
     decision: Mapping[str, Any]
     parameters: tuple[str, Mapping[str, float], float | None, str] | None = None
     events: Sequence[tuple[str, str, str]] = field(default_factory=tuple)
+    model: Mapping[str, float | int | None] | None = None
 
 
 class Store:
@@ -210,14 +242,19 @@ class Store:
             _insert_meta(conn, "recovered_from", f"{moved.name}: {exc}")
         return cls(path, conn, moved_aside=moved)
 
-    def begin_run(self, *, panel: str, mode: str, version: str, config_path: str | None
-                  ) -> int:
-        """Record the start of a daemon run; returns its ``run_id``."""
+    def begin_run(self, *, panel: str, mode: str, version: str, config_path: str | None,
+                  config: Mapping[str, Any] | None = None) -> int:
+        """Record the start of a daemon run; returns its ``run_id``.
+
+        ``config`` is the panel configuration as a mapping (``dataclasses.asdict``), kept as
+        JSON so that a report knows the site, the bounds and the horizon of the run.
+        """
         with self.conn:
             cur = self.conn.execute(
-                "INSERT INTO runs (panel, mode, started_utc, pid, version, config_path) "
-                "VALUES (?, ?, ?, ?, ?, ?)",
-                (panel, mode, iso_now(), os.getpid(), version, config_path))
+                "INSERT INTO runs (panel, mode, started_utc, pid, version, config_path, "
+                "config_json) VALUES (?, ?, ?, ?, ?, ?, ?)",
+                (panel, mode, iso_now(), os.getpid(), version, config_path,
+                 None if config is None else _sql(dict(config))))
         self.run_id = int(cur.lastrowid or 0)
         return self.run_id
 
@@ -256,6 +293,13 @@ class Store:
                     (run, rec.cycle, rec.time_s, source,
                      *(_num(theta.get(n)) for n in PARAMETER_NAMES), _sql(other), _num(cost),
                      detail))
+            if rec.model is not None:
+                cols = ["run_id", "cycle", "time_s",
+                        *(c for c, _ in MODEL_COLUMNS if c in rec.model)]
+                self.conn.execute(
+                    f"INSERT INTO model ({', '.join(cols)}) "
+                    f"VALUES ({', '.join('?' for _ in cols)})",
+                    (run, rec.cycle, rec.time_s, *(_sql(rec.model[c]) for c in cols[3:])))
             self._events(run, rec.cycle, rec.time_s, rec.events)
 
     def event(self, *, cycle: int, time_s: float, level: str, kind: str, message: str) -> None:

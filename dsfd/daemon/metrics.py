@@ -1,0 +1,144 @@
+"""``daemon.metrics_file``: the panel's metrics for Prometheus, via node_exporter's textfile
+collector — no network listener in the daemon.
+
+After every cycle the whole file is written with ``prometheus_client.write_to_textfile``
+(a temporary file next to it, then ``rename(2)``), so a scrape never sees it half-written.
+Every series carries the label ``panel``; those about one sensor also ``signal``.
+
+=====================================  =======  ==============================================
+metric                                 type     meaning
+=====================================  =======  ==============================================
+dsfd_cycle_duration_seconds            gauge    wall time of the last cycle, all stages
+dsfd_decision_duration_seconds         gauge    the last cycle's decide stage
+dsfd_last_cycle_timestamp_seconds      gauge    cycle time of the last completed cycle (UTC)
+dsfd_cycles_total{method}              counter  cycles by who decided (mpc, rule, safe, …)
+dsfd_flagged_samples_total{signal,     counter  readings not used, by signal and quality flag
+quality}
+dsfd_write_failures_total              counter  commands not verified by read-back
+dsfd_calibration_updates_total         counter  successful on-line calibration updates
+dsfd_calibration_age_seconds           gauge    since the newest data of the last update
+                                                (NaN before the first)
+dsfd_parameter{parameter}              gauge    the calibrated θ̂ and heat-flux offsets
+dsfd_louver_angle_degrees              gauge    position in effect (command, or read back)
+dsfd_airflow_regime                    gauge    1..10
+dsfd_damper_opening_ratio              gauge    0..1
+dsfd_hold_active                       gauge    1 while a manual hold decides (method manual)
+dsfd_room_heat_watts{term}             gauge    the model's room-side heat of the last step
+=====================================  =======  ==============================================
+
+Counters count since the daemon started (Prometheus handles the restart); the counters'
+``*_created`` series are left out.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from dsfd.daemon.calibration import CalibrationStage
+    from dsfd.daemon.loop import CycleOutcome
+
+__all__ = ["INSTALL_HINT", "MetricsFile", "metrics_problem"]
+
+INSTALL_HINT = "pip install 'dsfd[metrics]'"
+
+
+def metrics_problem(path: str | None) -> str | None:
+    """Why ``daemon.metrics_file`` cannot be written, or None (checked at start and reload)."""
+    if path is None:
+        return None
+    try:
+        import prometheus_client  # noqa: F401
+    except ImportError:
+        return f"needs prometheus_client, which is not installed: {INSTALL_HINT}"
+    parent = Path(path).parent
+    if not parent.is_dir():
+        return f"directory {parent} does not exist"
+    return None
+
+
+class MetricsFile:
+    """The metrics of one panel and the file they are written to."""
+
+    def __init__(self, path: str | Path, panel: str) -> None:
+        from prometheus_client import CollectorRegistry, Counter, Gauge, disable_created_metrics
+
+        # Counters' ``*_created`` series (wall time of the counter's creation) only repeat the
+        # daemon's start time for a textfile; the process is the daemon, so this is global.
+        disable_created_metrics()
+        self.path = str(path)
+        self.panel = panel
+        r = self.registry = CollectorRegistry()
+        p = ["panel"]
+
+        def gauge(name: str, doc: str, labels: list[str] = p) -> Gauge:
+            return Gauge(name, doc, labels, registry=r)
+
+        def counter(name: str, doc: str, labels: list[str] = p) -> Counter:
+            return Counter(name, doc, labels, registry=r)
+
+        self.cycle_s = gauge("dsfd_cycle_duration_seconds", "Wall time of the last cycle")
+        self.decide_s = gauge("dsfd_decision_duration_seconds",
+                              "Wall time of the last cycle's decision stage")
+        self.last_cycle = gauge("dsfd_last_cycle_timestamp_seconds",
+                                "Cycle time of the last completed cycle, UTC unix seconds")
+        self.cycles = counter("dsfd_cycles", "Cycles by who decided", [*p, "method"])
+        self.flagged = counter("dsfd_flagged_samples", "Readings flagged and not used",
+                               [*p, "signal", "quality"])
+        self.write_failures = counter("dsfd_write_failures",
+                                      "Commands not verified by read-back")
+        self.updates = counter("dsfd_calibration_updates",
+                               "Successful on-line calibration updates")
+        self.calibration_age = gauge(
+            "dsfd_calibration_age_seconds",
+            "Seconds since the newest data of the last calibration update (NaN: none yet)")
+        self.parameter = gauge("dsfd_parameter", "Calibrated model parameter",
+                               [*p, "parameter"])
+        self.louver = gauge("dsfd_louver_angle_degrees", "Louver angle in effect")
+        self.regime = gauge("dsfd_airflow_regime", "Airflow regime in effect (1..10)")
+        self.damper = gauge("dsfd_damper_opening_ratio", "Damper opening in effect (0..1)")
+        self.hold = gauge("dsfd_hold_active", "1 while a manual hold decides the position")
+        self.heat = gauge("dsfd_room_heat_watts",
+                          "Model estimate of the heat into the room over the last step",
+                          [*p, "term"])
+        for term in ("q_cv_rd", "q_sol_trans", "q_air", "q_da"):
+            self.heat.labels(panel, term).set(math.nan)
+        self.calibration_age.labels(panel).set(math.nan)
+        self.write_failures.labels(panel)
+        self.updates.labels(panel)
+
+    def update(self, out: CycleOutcome, calibration: CalibrationStage) -> None:
+        """Take the figures of a completed cycle."""
+        panel = self.panel
+        t = out.timings_ms
+        self.cycle_s.labels(panel).set(t.get("total", math.nan) / 1e3)
+        self.decide_s.labels(panel).set(t.get("decide", math.nan) / 1e3)
+        self.last_cycle.labels(panel).set(out.time_s)
+        self.cycles.labels(panel, out.method).inc()
+        readings = out.quality.sample.readings
+        for name in out.quality.flags:
+            self.flagged.labels(panel, name, readings[name].quality.value).inc()
+        if out.write_status == "failed":
+            self.write_failures.labels(panel).inc()
+        if out.calibration is not None and out.calibration.updated:
+            self.updates.labels(panel).inc()
+        last = calibration.state.last_update_s
+        self.calibration_age.labels(panel).set(math.nan if last is None else out.time_s - last)
+        for name, value in calibration.theta_by_name().items():
+            self.parameter.labels(panel, name).set(value)
+        pos = out.applied or out.command
+        self.louver.labels(panel).set(pos.phi_deg)
+        self.regime.labels(panel).set(pos.afr)
+        self.damper.labels(panel).set(pos.or_pct / 100.0)
+        self.hold.labels(panel).set(1.0 if out.method == "manual" else 0.0)
+        pred = out.estimate.prediction if out.estimate is not None else None
+        for term in ("q_cv_rd", "q_sol_trans", "q_air", "q_da"):
+            self.heat.labels(panel, term).set(math.nan if pred is None else pred.heat_w[term])
+
+    def write(self) -> None:
+        """Replace the file atomically (raises OSError if it cannot)."""
+        from prometheus_client import write_to_textfile
+
+        write_to_textfile(self.path, self.registry)

@@ -1,0 +1,101 @@
+"""``daemon.metrics_file``: Prometheus's own parser reads it while the daemon rewrites it."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+from prometheus_client.parser import text_string_to_metric_families
+
+from tests.daemon.harness import MORNING_ISO, ROOT, dsfd_command, query, write_panel
+
+CYCLES = 40
+METRICS = {"dsfd_cycle_duration_seconds", "dsfd_decision_duration_seconds",
+           "dsfd_last_cycle_timestamp_seconds", "dsfd_cycles", "dsfd_flagged_samples",
+           "dsfd_write_failures", "dsfd_calibration_updates", "dsfd_calibration_age_seconds",
+           "dsfd_parameter", "dsfd_louver_angle_degrees", "dsfd_airflow_regime",
+           "dsfd_damper_opening_ratio", "dsfd_hold_active", "dsfd_room_heat_watts"}
+
+
+def parse(text: str) -> dict[str, list]:
+    return {f.name: f.samples for f in text_string_to_metric_families(text)}
+
+
+def test_metrics_file_is_complete_at_every_read_and_matches_the_database(tmp_path):
+    prom = tmp_path / "textfile" / "dsfd-test.prom"
+    prom.parent.mkdir()
+    panel = write_panel(tmp_path / "panel.yaml", devices=False,
+                        extra={"daemon": {"metrics_file": str(prom)}})
+    state = tmp_path / "state"
+    proc = subprocess.Popen(
+        dsfd_command("run", "--config", str(panel), "--dry-run", "--plant", "sim",
+                     "--plant-fidelity", "lumped", "--start", MORNING_ISO, "--cycles",
+                     str(CYCLES), "--state-dir", str(state)),
+        cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    reads, seen = 0, set()
+    try:
+        while proc.poll() is None:  # read as fast as we can while the daemon rewrites
+            try:
+                text = prom.read_text()
+            except FileNotFoundError:
+                continue
+            families = parse(text)  # raises on a torn line
+            assert set(families) == METRICS, sorted(METRICS ^ set(families))
+            reads += 1
+            seen.add(families["dsfd_last_cycle_timestamp_seconds"][0].value)
+    finally:
+        proc.wait(timeout=300)
+    assert proc.returncode == 0, proc.stderr.read().decode() if proc.stderr else ""
+    print(f"{reads} reads, {len(seen)} distinct cycles")
+    assert reads > 0 and len(seen) >= 1
+    # Only the .prom file is left (the temporary files were renamed over it).
+    assert [p.name for p in prom.parent.iterdir()] == [prom.name]
+    families = parse(prom.read_text())
+    db = state / "timeseries.sqlite"
+    labels = {s.labels.get("panel") for f in families.values() for s in f}
+    assert labels == {"suwon-south"}
+    cycles = {s.labels["method"]: s.value for s in families["dsfd_cycles"]
+              if s.name == "dsfd_cycles_total"}
+    assert cycles == {m: float(n) for m, n in query(
+        db, "SELECT method, COUNT(*) FROM decisions GROUP BY method")}
+    (t, phi, afr, or_pct), = query(db, "SELECT time_s, applied_phi_deg, applied_afr, "
+                                       "applied_or_pct FROM model ORDER BY cycle DESC LIMIT 1")
+    value = {name: fam[0].value for name, fam in families.items() if fam}
+    assert families["dsfd_flagged_samples"] == []  # no fault injected in this run
+    assert value["dsfd_last_cycle_timestamp_seconds"] == t
+    assert (value["dsfd_louver_angle_degrees"], value["dsfd_airflow_regime"],
+            value["dsfd_damper_opening_ratio"]) == (phi, afr, or_pct / 100)
+    assert value["dsfd_hold_active"] == 0.0
+    params = {s.labels["parameter"]: s.value for s in families["dsfd_parameter"]}
+    (h_out, n), = query(db, "SELECT h_out, n FROM parameters ORDER BY cycle DESC LIMIT 1")
+    assert (params["h_out"], params["n"]) == (h_out, n)
+    heat = {s.labels["term"]: s.value for s in families["dsfd_room_heat_watts"]}
+    (q_sol,), = query(db, "SELECT q_sol_trans_w FROM model ORDER BY cycle DESC LIMIT 1")
+    assert set(heat) == {"q_cv_rd", "q_sol_trans", "q_air", "q_da"}
+    assert heat["q_sol_trans"] == q_sol
+
+
+def run_without(module: str, args: list[str]) -> subprocess.CompletedProcess:
+    """``dsfd ARGS`` in a Python where ``module`` cannot be imported (extra not installed)."""
+    code = (f"import sys; sys.modules[{module!r}] = None\n"
+            "from dsfd.cli import main\nsys.exit(main(sys.argv[1:]))")
+    return subprocess.run([sys.executable, "-c", code, *args], cwd=ROOT, capture_output=True,
+                          text=True, timeout=120)
+
+
+def test_a_metrics_file_without_prometheus_client_is_a_configuration_error(tmp_path):
+    prom = tmp_path / "dsfd.prom"
+    panel = write_panel(tmp_path / "panel.yaml", devices=False,
+                        extra={"daemon": {"metrics_file": str(prom)}})
+    out = run_without("prometheus_client", [
+        "run", "--config", str(panel), "--dry-run", "--plant", "sim", "--plant-fidelity",
+        "lumped", "--cycles", "2", "--state-dir", str(tmp_path / "state")])
+    assert out.returncode == 2
+    assert "daemon.metrics_file" in out.stderr and "pip install 'dsfd[metrics]'" in out.stderr
+    assert not (tmp_path / "state").exists() and not prom.exists()
+
+
+def test_a_report_without_matplotlib_exits_2_naming_the_extra(tmp_path):
+    out = run_without("matplotlib", ["report", "--state-dir", str(tmp_path), "--out",
+                                     str(tmp_path / "r.html")])
+    assert out.returncode == 2 and "pip install 'dsfd[report]'" in out.stderr
