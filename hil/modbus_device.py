@@ -15,7 +15,14 @@ map the driver decodes with. Faults:
 * ``silent = True`` — requests are processed but no answer is sent (timeouts);
 * ``frozen_actuators = True`` — writes are acknowledged but do not change the registers
   (a stuck motor; read-back verification must catch it);
-* :meth:`serve_nan` — a float32 point serves NaN, an integer point its ``nan_value`` code.
+* :meth:`serve_nan` — a float32 point serves NaN, an integer point its ``nan_value`` code;
+* ``short_reads = True`` — register reads are answered with one register fewer than asked
+  (a device with a wrong register map).
+
+A person at the panel: :meth:`move_actuators` changes the actuator registers the way a
+motor controller's local buttons would (not through a client request, so not counted in
+``writes``); :meth:`set_override_input` flips the panel's hand/auto input (a coil, discrete
+input or holding register, from the device's ``override_input``).
 
 Run standalone against a panel file::
 
@@ -41,12 +48,13 @@ from pymodbus.simulator import DataType, SimData, SimDevice
 from dsfd.registers import RegisterPoint, decode, encode, from_pattern
 
 if TYPE_CHECKING:
-    from dsfd.config.devices import DeviceConfig
+    from dsfd.config.devices import DeviceConfig, OverrideInput
 
 __all__ = ["EmulatedModbusDevice"]
 
 log = logging.getLogger(__name__)
-_FC_READ = {"input": 4, "holding": 3}
+_FC_READ = {"input": 4, "holding": 3, "coil": 1, "discrete_input": 2}
+_OVERRIDE = "override_input"
 _FC_WRITES = (6, 16)
 
 
@@ -55,15 +63,20 @@ class EmulatedModbusDevice:
 
     def __init__(self, *, sensors: Sequence[RegisterPoint],
                  actuators: Sequence[RegisterPoint] = (), device_id: int = 1,
-                 fill_gaps: bool = False) -> None:
+                 fill_gaps: bool = False, override_input: OverrideInput | None = None) -> None:
         self.device_id = device_id
         self.points: dict[str, RegisterPoint] = {p.name: p for p in (*sensors, *actuators)}
         self.actuators = tuple(actuators)
         self.fill_gaps = fill_gaps
+        self.override_input = override_input
+        if override_input is not None and override_input.table == "holding":
+            self.points[_OVERRIDE] = RegisterPoint(name=_OVERRIDE, address=override_input.address,
+                                                   table="holding", data_type="uint16")
         #: Fault switches (see module docstring).
         self.busy = False
         self.silent = False
         self.frozen_actuators = False
+        self.short_reads = False
         #: Client requests received, by function code (also while busy or silent), and
         #: accepted client writes as (address, registers).
         self.requests: Counter[int] = Counter()
@@ -77,14 +90,19 @@ class EmulatedModbusDevice:
     def from_config(cls, cfg: DeviceConfig, *, fill_gaps: bool = False) -> EmulatedModbusDevice:
         """Emulator of a configured ``modbus_tcp``/``modbus_rtu`` device."""
         return cls(sensors=cfg.sensor_points(), actuators=cfg.actuator_points(),
-                   device_id=cfg.device_id, fill_gaps=fill_gaps)
+                   device_id=cfg.device_id, fill_gaps=fill_gaps,
+                   override_input=cfg.override_input)
 
     def _tables(self) -> tuple[list[SimData], list[SimData], list[SimData], list[SimData]]:
         # SimDevice rejects empty blocks; one invalid register keeps an unused table empty.
-        def bits() -> list[SimData]:
-            return [SimData(0, count=16, values=False, datatype=DataType.BITS)]
+        def bits(table: str) -> list[SimData]:
+            oi = self.override_input
+            last = oi.address if oi is not None and oi.table == table else 0
+            return [SimData(0, count=16 * (last // 16 + 1), values=False,
+                            datatype=DataType.BITS)]
 
-        return bits(), bits(), self._table("holding"), self._table("input")
+        return (bits("coil"), bits("discrete_input"), self._table("holding"),
+                self._table("input"))
 
     def _table(self, table: str) -> list[SimData]:
         pts = sorted((p for p in self.points.values() if p.table == table),
@@ -169,6 +187,8 @@ class EmulatedModbusDevice:
         # datastore access, and FC 6 accesses it twice (set, then get for the echo).
         if not sending:
             self.requests[pdu.function_code] += 1
+        elif self.short_reads and pdu.function_code in (3, 4) and len(pdu.registers) > 1:
+            pdu.registers = pdu.registers[:-1]
         return pdu
 
     # ----------------------------------------------------------------------- values
@@ -221,6 +241,30 @@ class EmulatedModbusDevice:
     async def actuator_values(self) -> dict[str, float]:
         """Last commanded actuator values [signal units]."""
         return {p.name: await self.value(p.name) for p in self.actuators}
+
+    async def move_actuators(self, values: Mapping[str, float]) -> None:
+        """A person moves the panel at the motor controller: the actuator registers change
+        without a client write (``writes`` does not count it)."""
+        for name, value in values.items():
+            if name not in {p.name for p in self.actuators}:
+                raise KeyError(f"{name} is not an actuator of this device")
+            await self.set_sensor(name, value)
+
+    async def set_override_input(self, active: bool) -> None:
+        """Set (True) or clear the hand/auto input as its wiring reads (``invert`` applied)."""
+        oi = self.override_input
+        if oi is None:
+            raise RuntimeError("this device has no override_input")
+        raw = active != oi.invert
+        if oi.table == "holding":
+            await self.set_registers(_OVERRIDE, [int(raw)])
+            return
+        self._internal = True
+        try:
+            await self._require_server().async_setValues(self.device_id, _FC_READ[oi.table],
+                                                         oi.address, [raw])
+        finally:
+            self._internal = False
 
     def _require_server(self) -> ModbusTcpServer | ModbusSerialServer:
         if self._server is None:

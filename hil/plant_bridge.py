@@ -21,7 +21,7 @@ controller). Each tick:
 3. the sensor readings are written into the input registers (a simulated dropout as the
    point's "no value" code), and the station emulator sends one protocol line with the
    outdoor air, irradiance and wind (humidity and pressure fields empty: the plant does not
-   simulate them).
+   simulate them), with :attr:`PlantBridge.station_override` replacing plant values (a gale).
 """
 
 from __future__ import annotations
@@ -61,6 +61,8 @@ class PlantBridge:
         self.counters: Counter[str] = Counter()
         #: Commands the plant accepted, in order, as {phi_deg, afr, or_pct}.
         self.applied: list[dict[str, float]] = []
+        #: Station values that replace the plant's (e.g. a storm: {"wind_speed_ms": 25}).
+        self.station_override: dict[str, float] = {}
         self._last_registers: dict[str, float] | None = None
         actuators = {p.name for p in io.actuators}
         self._sensors = tuple(n for n in io.points if n not in actuators)
@@ -129,7 +131,7 @@ class PlantBridge:
                 if name in values:
                     await self._set(name, values[name])
         if self.station is not None:
-            self.station.send(_station_values(values))
+            self.station.send({**_station_values(values), **self.station_override})
             self.counters["lines_sent"] += 1
 
     async def _set(self, name: str, value: float) -> None:

@@ -14,8 +14,8 @@ from collections.abc import Sequence
 from dsfd import __version__
 
 #: Command modules, in the order they appear in ``dsfd --help``.
-COMMANDS = ("check_config", "simulate", "run", "fleet", "report", "export", "bench",
-            "calibrate", "validate", "convert_aalborg")
+COMMANDS = ("check_config", "simulate", "run", "operator", "status", "fleet", "report",
+            "export", "bench", "calibrate", "validate", "convert_aalborg")
 
 EXIT_OK = 0
 EXIT_FAILURE = 1

@@ -7,8 +7,8 @@ Examples::
     dsfd run --config PANEL --dry-run --plant sim --cycles 1440   # a simulated winter day
 
 Exit codes: 0 after the requested cycles or a stop signal, 2 for a bad configuration or bad
-options (reported before any device is touched, naming the key path), 1 if the daemon
-failed.
+options (reported before any device is touched, naming the key path), 3 if another process
+controls the state directory (its PID named; nothing was opened), 1 if the daemon failed.
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ if TYPE_CHECKING:
     from dsfd.config import PanelConfig
     from dsfd.daemon.runner import Integration
 
-EXIT_OK, EXIT_FAILURE, EXIT_USAGE = 0, 1, 2
+EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_BUSY = 0, 1, 2, 3
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -91,7 +91,8 @@ def _integrations(cfg: PanelConfig, config_path: Path) -> list[Integration]:
 
 def run(args: argparse.Namespace) -> int:
     from dsfd.daemon.logging_setup import configure_logging
-    from dsfd.daemon.runner import RunOptions, load_for_run, resolve_state_dir, serve
+    from dsfd.daemon.runner import RunOptions, load_for_run, serve
+    from dsfd.daemon.startup import resolve_state_dir
     from dsfd.integrations.mqtt.link import MissingExtraError
     from dsfd.measured import parse_iso_utc
 
@@ -152,13 +153,19 @@ def run(args: argparse.Namespace) -> int:
         print("  simulated plant: nothing is written to hardware")
     print(f"  state directory: {state_dir}"
           + (" (temporary, removed at exit; --state-dir keeps it)" if temporary else ""))
+    import sqlite3
+
+    from dsfd.storage.lock import StateDirBusyError
     from dsfd.storage.timeseries import SchemaTooNewError
 
     try:
         summary = asyncio.run(serve(opts, cfg, state_dir=state_dir, plant=plant,
                                     integrations=integrations))
-    except (OSError, SchemaTooNewError) as exc:  # e.g. a state directory the service user
-        # cannot write, or a database of a newer dsfd (kept as it is)
+    except StateDirBusyError as exc:
+        print(f"dsfd run: {exc}; nothing was opened", file=sys.stderr)
+        return EXIT_BUSY
+    except (OSError, SchemaTooNewError, sqlite3.Error) as exc:  # e.g. a state directory the
+        # service user cannot write, a full disk at start, or a database of a newer dsfd
         print(f"dsfd run: {exc}", file=sys.stderr)
         return EXIT_FAILURE
     finally:

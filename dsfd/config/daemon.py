@@ -7,6 +7,7 @@ YAML shape (the ``daemon:`` section of a panel file; every key is optional)::
       cycle_period_s: 60
       calibrate_budget_s: 10
       store_budget_s: 5
+      store_buffer_cycles: 720       # cycles kept in memory while the database cannot be written
       room_temperature_source: auto  # auto | sensor | config
       metrics_file: null             # e.g. /var/lib/node_exporter/textfile_collector/x.prom
       quality:
@@ -91,6 +92,10 @@ class DaemonSettings:
         "the previous parameters are kept", unit="s", gt=0, le=600)
     store_budget_s: float = setting(
         5.0, doc="Time allowed for writing the cycle to the database", unit="s", gt=0, le=600)
+    store_buffer_cycles: int = setting(
+        720, doc="Cycles kept in memory while the database cannot be written (full disk, I/O "
+        "error) and written once it can; older ones are dropped and counted in an event",
+        ge=1, le=100000)
     room_temperature_source: Literal["auto", "sensor", "config"] = setting(
         "auto", doc="Room air temperature: the t_room_c sensor (sensor), room.t_in_c (config), "
         "or the sensor while it reads GOOD and room.t_in_c otherwise (auto)")

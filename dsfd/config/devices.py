@@ -14,6 +14,7 @@ YAML shape (the ``devices:`` section of a panel file)::
             - {signal: x1_c, address: 0, data_type: float32}
           actuators:
             - {signal: phi_deg, address: 100, data_type: int16, scale: 0.1}
+          override_input: {table: coil, address: 0}   # optional: wall switch / BMS hand flag
 
 Errors name the key path, e.g. ``devices.entries[0].sensors[3].address``.
 
@@ -21,7 +22,8 @@ Worst-case I/O time per cycle (checked against the budgets, summed over all devi
 though drivers on different links run concurrently, so the check is conservative):
 
 * Modbus read:  ``timeout_s · (1 + (retries + 1) · read_blocks)`` — one connect attempt plus
-  every block timing out on every attempt; the driver enforces it as a hard cap.
+  every block timing out on every attempt; the driver enforces it as a hard cap. An
+  ``override_input`` is one more block.
 * Modbus write: ``timeout_s · (1 + (retries + 1) · (write_blocks + read_back_blocks))``.
 * Station read: ``2 · timeout_s`` (drain deadline plus one serial read timeout).
 """
@@ -48,6 +50,7 @@ __all__ = [
     "ActuatorPoint",
     "DeviceConfig",
     "Devices",
+    "OverrideInput",
     "SensorPoint",
     "SerialLine",
     "TcpEndpoint",
@@ -143,6 +146,21 @@ class ActuatorPoint(_Register):
 
 
 @dataclass(frozen=True, kw_only=True)
+class OverrideInput:
+    """A hand/auto signal: while it is active the daemon holds the panel (manual hold)."""
+
+    table: Literal["coil", "discrete_input", "holding"] = setting(
+        doc="Where the signal lives: a coil (FC 1), a discrete input (FC 2) or a holding "
+        "register (FC 3, active while non-zero)")
+    address: int = setting(doc="Coil, input or register address, 0-based", ge=0, le=65535)
+    invert: bool = setting(False, doc="true: active while the signal reads 0 (a normally "
+                           "closed contact)")
+
+    def where(self) -> str:
+        return f"{self.table.replace('_', ' ')} {self.address}"
+
+
+@dataclass(frozen=True, kw_only=True)
 class DeviceConfig:
     """One device: a Modbus server (TCP or an RTU slave) or the serial weather station."""
 
@@ -168,6 +186,9 @@ class DeviceConfig:
         "devices that answer reads of unmapped registers)", ge=0, le=124)
     sensors: tuple[SensorPoint, ...] = setting((), doc="Measured signals and their registers")
     actuators: tuple[ActuatorPoint, ...] = setting((), doc="Commanded signals and registers")
+    override_input: OverrideInput | None = setting(
+        None, doc="Optional wall switch or BMS hand flag: while it is set the daemon writes "
+        "nothing (manual hold; wind protection still acts)")
 
     @property
     def is_modbus(self) -> bool:
@@ -195,9 +216,10 @@ class DeviceConfig:
         """Upper bound of one cycle's read time [s] (see module docstring)."""
         if not self.is_modbus:
             return 2.0 * self.timeout_s
-        if not self.sensors:
-            return 0.0
         blocks = len(plan_reads(self.sensor_points(), max_gap=self.max_read_gap))
+        blocks += self.override_input is not None
+        if not blocks:
+            return 0.0
         return self.timeout_s * (1 + (self.retries + 1) * blocks)
 
     def worst_case_write_s(self) -> float:
@@ -226,13 +248,14 @@ class DeviceConfig:
             if self.tcp is not None:
                 out.append(Problem("tcp", "...", f"not used by kind {self.kind}; remove it"))
         if not self.is_modbus:
-            for key in ("sensors", "actuators"):
+            for key in ("sensors", "actuators", "override_input"):
                 if getattr(self, key):
                     out.append(Problem(key, "...", "a serial_station delivers the fixed "
                                        f"fields {', '.join(STATION_SIGNALS)}; remove {key}"))
             return out
-        if not self.sensors and not self.actuators:
-            out.append(Problem("sensors", (), "a Modbus device needs sensors or actuators"))
+        if not self.sensors and not self.actuators and self.override_input is None:
+            out.append(Problem("sensors", (), "a Modbus device needs sensors, actuators or an "
+                               "override_input"))
         seen: dict[str, str] = {}
         for key, points in (("sensors", self.sensors), ("actuators", self.actuators)):
             for i, p in enumerate(points):
@@ -243,7 +266,20 @@ class DeviceConfig:
         if out:
             return out
         out += self._overlap_problems()
-        return out
+        return out + self._override_input_problems()
+
+    def _override_input_problems(self) -> list[Problem]:
+        oi = self.override_input
+        if oi is None or oi.table != "holding":
+            return []
+        for key, entries in (("sensors", self.sensors), ("actuators", self.actuators)):
+            for i, entry in enumerate(entries):
+                p = entry.point()
+                if p.table == "holding" and p.address <= oi.address < p.end:
+                    return [Problem("override_input.address", oi.address,
+                                    f"holding register {oi.address} is already {key}[{i}] "
+                                    f"({p.address}..{p.end - 1})")]
+        return []
 
     def _overlap_problems(self) -> list[Problem]:
         # Runs only when every point passed its own check, so point() cannot fail here.
@@ -297,6 +333,10 @@ class Devices:
                                        f"{sig} is already delivered by {signal_at[sig]}"))
                 signal_at.setdefault(sig, here)
             links[d.link_key()].append(i)
+        with_input = [i for i, d in enumerate(self.entries) if d.override_input is not None]
+        out += [Problem(f"entries[{i}].override_input", "...", f"entries[{with_input[0]}] "
+                        "already has the panel's override input; give only one")
+                for i in with_input[1:]]
         for members in links.values():
             out += self._shared_link_problems(members)
         out += self._budget_problems()

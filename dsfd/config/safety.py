@@ -10,21 +10,32 @@ YAML shape (the ``safety:`` section of a panel file; every key is optional)::
       wind_release_cycles: 10
       wind_safe_angle_deg: 90
       min_louver_move_interval_s: 300
+      manual_hold_min: 120
+      manual_reset_local: "22:00"
 
-Stages, highest priority first (``dsfd.daemon.safety``): faults → wind → actuator limits →
-louver quantisation → louver move interval → regimes the dampers allow. Errors name the key
-path, e.g. ``safety.safe_state.afr``.
+Stages, highest priority first (``dsfd.daemon.safety``): wind → manual hold → faults →
+actuator limits → louver quantisation → louver move interval → regimes the dampers allow.
+Errors name the key path, e.g. ``safety.safe_state.afr``.
 """
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from typing import Literal
 
 from dsfd.config.loader import Problem, setting
 from dsfd.signals import SENSORS
 
-__all__ = ["SafeState", "Safety"]
+__all__ = ["SafeState", "Safety", "parse_local_time"]
+
+_HH_MM = re.compile(r"^([01][0-9]|2[0-3]):([0-5][0-9])$")
+
+
+def parse_local_time(text: str) -> int | None:
+    """Minutes after midnight of a 24-hour ``"HH:MM"``, or None if ``text`` is not one."""
+    m = _HH_MM.match(text)
+    return None if m is None else int(m.group(1)) * 60 + int(m.group(2))
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -77,6 +88,19 @@ class Safety:
     min_louver_move_interval_s: float = setting(
         300.0, doc="Least time between two louver moves (motor wear, occupants); the fault "
         "and wind stages may move it at any time", unit="s", ge=0, le=86400)
+    manual_hold_min: float = setting(
+        120.0, doc="How long the daemon leaves the actuators alone after a person moved them "
+        "(detected) or an operator held them without --hold; wind protection still acts",
+        unit="min", ge=1, le=10080)
+    manual_reset_local: str | int | None = setting(
+        None, doc="Daily time (24-hour \"HH:MM\", panel local time site.utc_offset_h) at which "
+        "a detected hold, or an operator hold without --hold, ends at the latest; null: none")
+
+    @property
+    def manual_reset_minute(self) -> int | None:
+        """The daily reset in minutes after local midnight, None if there is none."""
+        reset = self.manual_reset_local
+        return parse_local_time(reset) if isinstance(reset, str) else None
 
     def check(self) -> list[Problem]:
         out = []
@@ -90,6 +114,13 @@ class Safety:
             if name not in SENSORS:
                 out.append(Problem(f"fault_signals[{i}]", name,
                                    f"not a sensor signal; known: {', '.join(SENSORS)}"))
+        reset = self.manual_reset_local
+        if isinstance(reset, int):  # YAML 1.1 reads an unquoted 22:00 as the number 1320
+            out.append(Problem("manual_reset_local", reset, 'expected a time in quotes, '
+                               '"HH:MM" (YAML reads an unquoted 22:00 as a number)'))
+        elif reset is not None and parse_local_time(reset) is None:
+            out.append(Problem("manual_reset_local", reset,
+                               'expected a 24-hour local time "HH:MM", e.g. "22:00"'))
         if self.safe_state.afr == 10 and self.safe_state.or_pct != 0.0:
             out.append(Problem("safe_state.or_pct", self.safe_state.or_pct,
                                "regime 10 has every damper closed; use 0"))

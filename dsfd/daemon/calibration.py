@@ -10,15 +10,21 @@ step_data`), the observer runs over them (:func:`~dsfd.estimation.observer.obser
 θ̂ is refitted. The fit runs on a *copy* of the calibrator in a worker thread: an update that
 misses its budget is abandoned and its result never applied, so θ̂ only changes between
 cycles. Every successful update is saved atomically (``calibration.json`` in the state
-directory, :mod:`dsfd.storage.calibration_file`); a restart resumes from it.
+directory, :mod:`dsfd.storage.calibration_file`); a restart resumes from it. A save that
+fails (full disk) keeps θ̂ in memory and is reported as an event; the next update saves again.
+
+An unusable ``calibration.json`` is moved aside (``calibration.json.corrupt.<time>``) and
+the stage resumes from the newest consistent row of the database's parameter history (a row
+with calibrated values, every parameter finite and inside the panel's current bounds), or
+from the priors if there is none; :attr:`CalibrationStage.origin` and an event say which.
 """
 
 from __future__ import annotations
 
 import math
 from collections import deque
-from collections.abc import Callable
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -32,9 +38,18 @@ from dsfd.estimation.state import CalibrationState, CalibrationStateError, state
 from dsfd.estimation.stepdata import step_data
 from dsfd.measured import CONTROL_COLUMNS, KNOWN_COLUMNS, MeasuredData, MeasuredDataError
 from dsfd.physics.model import LumpedModel
-from dsfd.storage.calibration_file import load_state_or_prior, save_state
+from dsfd.storage.calibration_file import (
+    CalibrationFileError,
+    load_state,
+    move_aside,
+    save_state,
+)
 
-__all__ = ["STATE_FILE", "CalibrationStage", "UpdateOutcome"]
+__all__ = ["STATE_FILE", "CalibrationStage", "HistoryRow", "UpdateOutcome",
+           "state_from_history"]
+
+#: A row of the database's parameter history: (run_id, cycle, time_s, source, value by name).
+HistoryRow = tuple[int, int, float, str, Mapping[str, float]]
 
 STATE_FILE = "calibration.json"
 _SENSOR_COLUMNS = tuple(c for c in KNOWN_COLUMNS if c not in CONTROL_COLUMNS)
@@ -54,18 +69,64 @@ class UpdateOutcome:
 class CalibrationStage:
     """Row record, calibrator and state file of one panel."""
 
-    def __init__(self, cfg: PanelConfig, model: LumpedModel, *, state_dir: Path) -> None:
+    def __init__(self, cfg: PanelConfig, model: LumpedModel, *, state_dir: Path,
+                 history: Callable[[], Sequence[HistoryRow]] | None = None) -> None:
         self.path = state_dir / STATE_FILE
         self.cfg = cfg
         self.model = model
         self.space = ParameterSpace.from_panel(cfg)
-        state, self.resume_message = load_state_or_prior(self.path, space=self.space,
-                                                         panel_id=cfg.panel.id)
-        self.resumed = self.resume_message.startswith("resumed")
+        #: Events for the first cycle's record (level, kind, message), drained by the loop.
+        self.events: list[tuple[str, str, str]] = []
+        #: Where θ̂ came from: "prior", "resumed" (calibration.json) or "database".
+        self.origin = "prior"
+        state = self._initial_state(history)
         self.calibrator = OnlineCalibrator(model, cfg.calibration, state=state)
         self._rows: deque[tuple[float, dict[str, float]]] = deque()
         self._run_start_s: float | None = None
         self._retry_after_s = -math.inf  # an attempt that fitted nothing waits an interval
+
+    @property
+    def resumed(self) -> bool:
+        """True if θ̂ did not start from the priors."""
+        return self.origin != "prior"
+
+    def _initial_state(self, history: Callable[[], Sequence[HistoryRow]] | None
+                       ) -> CalibrationState:
+        """The state file, else (moved aside if unusable) the database history, else priors;
+        sets :attr:`resume_message` and :attr:`origin`."""
+        panel = self.cfg.panel.id
+        if not self.path.exists():
+            self.resume_message = (f"no calibration state at {self.path}: starting from the "
+                                   "panel priors")
+            return CalibrationState.initial(panel, self.space)
+        try:
+            state = load_state(self.path, space=self.space, panel_id=panel)
+        except CalibrationFileError as exc:
+            why = str(exc)
+        else:
+            self.origin = "resumed"
+            self.resume_message = (f"resumed calibration state from {self.path} "
+                                   f"({state.updates} updates)")
+            return state
+        try:
+            kept = f"moved aside to {move_aside(self.path).name}"
+        except OSError as err:
+            kept = f"could not be moved aside ({err.strerror or err})"
+        try:
+            rows = list(history()) if history is not None else []
+        except Exception as err:  # a database problem must not keep the daemon from starting
+            rows, why = [], f"{why}; the parameter history could not be read ({err})"
+        found = state_from_history(rows, space=self.space, panel_id=panel)
+        if found is None:
+            state, self.origin = CalibrationState.initial(panel, self.space), "prior"
+            then = "no consistent parameter history in the database: starting from the priors"
+        else:
+            state, where = found
+            self.origin = "database"
+            then = f"resumed from the database's parameter history ({where})"
+        self.resume_message = f"calibration state unusable ({why}); {kept}; {then}"
+        self.events.append(("warning", "calibration_recovered", self.resume_message))
+        return state
 
     @property
     def theta(self) -> np.ndarray:
@@ -115,6 +176,12 @@ class CalibrationStage:
         while self._rows and self._rows[0][0] < t - keep_s:
             self._rows.popleft()
 
+    def restart_record(self) -> None:
+        """Forget the rows (after a wall-clock step: two time lines do not make model
+        steps); the next update waits for ``calibration.min_window_h`` of new rows."""
+        self._rows.clear()
+        self._run_start_s = None
+
     def set_controls(self, cmd: Command | None) -> None:
         """The actuator position applied from the newest row on (None: unknown)."""
         if self._rows and cmd is not None:
@@ -158,7 +225,12 @@ class CalibrationStage:
         self.calibrator.state = result.state
         if result.skipped:
             return UpdateOutcome(False, result.skipped, self.theta, math.nan, 0)
-        save_state(self.path, result.state, self.space)
+        try:
+            save_state(self.path, result.state, self.space)
+        except OSError as exc:  # full disk: θ̂ is kept in memory, the next update saves again
+            self.events.append(("error", "calibration_not_saved",
+                                f"{self.path}: {exc.strerror or exc}; the updated parameters "
+                                "are used but a restart would start from the previous file"))
         fit = result.fit
         return UpdateOutcome(True, "", self.theta, float(fit.cost) if fit else math.nan,
                              int(fit.n_residuals) if fit else 0)
@@ -172,3 +244,19 @@ class CalibrationStage:
             n: np.array([r.get(n, math.nan) for _, r in rows], float) for n in names}
         return MeasuredData(np.array([t for t, _ in rows], float), columns,
                             source=f"daemon record of panel {self.cfg.panel.id}")
+
+
+def state_from_history(rows: Sequence[HistoryRow], *, space: ParameterSpace, panel_id: str
+                       ) -> tuple[CalibrationState, str] | None:
+    """The newest row whose θ is complete, finite and inside the bounds of ``space``, as a
+    state (covariance: the first prior, since the history keeps none), and where it came
+    from; None if no row qualifies. Offsets missing from a row are 0."""
+    for run, cycle, time_s, source, values in rows:
+        theta = np.array([values.get(name, 0.0 if i >= N_PARAMS else math.nan)
+                          for i, name in enumerate(FIT_NAMES)], float)
+        if np.all(np.isfinite(theta)) and np.all(theta >= space.lower) and \
+                np.all(theta <= space.upper):
+            state = replace(CalibrationState.initial(panel_id, space), theta=theta,
+                            last_update_s=time_s)
+            return state, f"run {run}, cycle {cycle}, {source}"
+    return None

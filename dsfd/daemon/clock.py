@@ -24,7 +24,12 @@ import time
 from dataclasses import dataclass
 from typing import Protocol
 
-__all__ = ["Clock", "CycleGrid", "RealClock", "SimulatedClock", "Slot"]
+__all__ = ["CLOCK_STEP_TOLERANCE_S", "Clock", "CycleGrid", "RealClock", "SimulatedClock", "Slot",
+           "WallClockWatch"]
+
+#: A difference between the wall clock's and the monotonic clock's advance between two
+#: cycles beyond this is a wall-clock step (NTP, RTC) [s]; NTP slewing stays far below it.
+CLOCK_STEP_TOLERANCE_S = 2.0
 
 
 class Clock(Protocol):
@@ -85,6 +90,7 @@ class SimulatedClock:
         self.speed = speed
         self._virtual_s = 0.0
         self._real0_s = time.monotonic()
+        self._wall_step_s = 0.0
 
     def monotonic(self) -> float:
         if self.speed is None:
@@ -92,7 +98,12 @@ class SimulatedClock:
         return (time.monotonic() - self._real0_s) * self.speed
 
     def wall(self) -> float:
-        return self.start_utc_s + self.monotonic()
+        return self.start_utc_s + self.monotonic() + self._wall_step_s
+
+    def step_wall(self, seconds: float) -> None:
+        """Step the wall clock by ``seconds`` [s] as NTP or an RTC would, leaving the
+        monotonic clock alone (tests of the daemon's behaviour across a step)."""
+        self._wall_step_s += float(seconds)
 
     async def sleep_until(self, deadline_s: float) -> None:
         if self.speed is None:
@@ -144,3 +155,21 @@ class CycleGrid:
             return Slot(nxt, self.deadline(nxt), 0)
         first_future = math.floor((now_s - self.t0_s) / self.period_s) + 1
         return Slot(first_future, self.deadline(first_future), first_future - nxt)
+
+
+class WallClockWatch:
+    """Notices wall-clock steps: compares how far the wall and the monotonic clock moved
+    since the previous look (ecosystem notes §6.1)."""
+
+    def __init__(self, tolerance_s: float = CLOCK_STEP_TOLERANCE_S) -> None:
+        self.tolerance_s = tolerance_s
+        self._last: tuple[float, float] | None = None
+
+    def step(self, monotonic_s: float, wall_s: float) -> float | None:
+        """The step of the wall clock since the previous call [s], None if within the
+        tolerance (or the first call)."""
+        last, self._last = self._last, (monotonic_s, wall_s)
+        if last is None:
+            return None
+        step = (wall_s - last[1]) - (monotonic_s - last[0])
+        return step if abs(step) > self.tolerance_s else None

@@ -33,24 +33,28 @@ import logging
 import math
 import time
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
-from typing import Any, TypeVar
+from dataclasses import dataclass
+from typing import TypeVar
 
 import numpy as np
 
-from dsfd.config.devices import Devices
 from dsfd.config.panel import PanelConfig
 from dsfd.control.baseline import rule_decision
 from dsfd.control.objective import is_heating
 from dsfd.control.optimiser import ControlProblem, Decision, MpcOptimiser
 from dsfd.control.paper_sqp import optimise_paper_sqp
 from dsfd.daemon.calibration import CalibrationStage, UpdateOutcome
-from dsfd.daemon.clock import Clock, Slot
+from dsfd.daemon.clock import Clock, Slot, WallClockWatch
+from dsfd.daemon.hold import HoldUpdate
+from dsfd.daemon.jobs import OffLoopJob
 from dsfd.daemon.logging_setup import get_logger
+from dsfd.daemon.manual import ManualStage
 from dsfd.daemon.observer import STATE_SIGNALS, StateEstimate, StateObserver, horizon_end
-from dsfd.daemon.quality import QualityChecker, QualityReport
+from dsfd.daemon.outcome import CycleOutcome
+from dsfd.daemon.quality import QualityChecker
 from dsfd.daemon.record import cycle_record
-from dsfd.daemon.safety import SafetyContext, SafetyPipeline, SafetyResult
+from dsfd.daemon.safety import SafetyContext, SafetyPipeline
+from dsfd.daemon.startup import DEFAULT_READ_BUDGET_S, DEFAULT_WRITE_BUDGET_S
 from dsfd.daemon.weather import CycleWeather, forecast_forcing, measured_weather
 from dsfd.drivers.base import (
     Command,
@@ -70,83 +74,15 @@ __all__ = ["Controller", "CycleOutcome", "OffLoopJob"]
 
 log = get_logger(__name__)
 T = TypeVar("T")
-#: Read and write budgets of a panel without a devices: section (the simulated plant): the
-#: defaults of the devices: section.
-DEFAULT_READ_BUDGET_S: float = Devices.__dataclass_fields__["read_budget_s"].default
-DEFAULT_WRITE_BUDGET_S: float = Devices.__dataclass_fields__["write_budget_s"].default
-
-
-class OffLoopJob:
-    """Runs one blocking job at a time in a worker thread, under a time budget."""
-
-    def __init__(self, name: str) -> None:
-        self.name = name
-        self._task: asyncio.Future[Any] | None = None
-        #: Jobs abandoned because they missed their budget.
-        self.late = 0
-
-    @property
-    def busy(self) -> bool:
-        """True while an abandoned job is still running."""
-        return self._task is not None and not self._task.done()
-
-    async def run(self, fn: Callable[[], T], *, budget_s: float) -> tuple[T | None, str]:
-        """``(result, "")``, or ``(None, why)`` if busy, late or failed."""
-        if self.busy:
-            return None, f"previous {self.name} still running"
-        task = asyncio.ensure_future(asyncio.to_thread(fn))
-        self._task = task
-        try:
-            return await asyncio.wait_for(asyncio.shield(task), budget_s), ""
-        except TimeoutError:
-            self.late += 1
-            task.add_done_callback(_consume)  # its result is never used
-            return None, f"{self.name} exceeded its budget of {budget_s:g} s"
-        except Exception as exc:
-            log.exception("%s failed", self.name)
-            return None, f"{self.name} failed: {type(exc).__name__}: {exc}"
-
-
-def _consume(task: asyncio.Future[Any]) -> None:
-    if not task.cancelled():
-        task.exception()  # retrieve it, so asyncio does not warn about it
 
 
 @dataclass
-class CycleOutcome:
-    """What one cycle did (for the log line, the summary, the bench and the tests)."""
+class _Reading:
+    """What the read stage brought in."""
 
-    cycle: int
-    slot: int
-    skipped_slots: int
-    time_s: float
-    method: str
-    command: Command
-    proposed: Decision | None
-    fallback: str
-    heating: bool | None
-    safety: SafetyResult
-    write_status: str
-    write: WriteResult | None
-    quality: QualityReport
-    calibration: UpdateOutcome | None
-    timings_ms: dict[str, float] = field(default_factory=dict)
-    manual_override: bool = False
-    store_ok: bool = True
-    #: The state estimate of this cycle (with the observer's one-step prediction).
-    estimate: StateEstimate | None = None
-    #: The actuator position in effect from this cycle on: the command unless a dry run
-    #: left the actuators where they were read.
-    applied: Command | None = None
-    #: x1..x6 predicted at ``time_s + horizon_s`` with ``applied`` held [K].
-    horizon_x_k: np.ndarray | None = None
-    horizon_s: float = math.nan
-    #: A simulated plant's own heat into the room since its start, by term [J].
-    plant_heat_j: Mapping[str, float] | None = None
-
-    @property
-    def cycle_ms(self) -> float:
-        return self.timings_ms.get("total", math.nan)
+    sample: Sample
+    read_back: Command | None
+    input_active: bool | None
 
 
 class Controller:
@@ -164,13 +100,18 @@ class Controller:
         self.write_enabled = write_enabled
         self.quality = QualityChecker(cfg.daemon.quality)
         self.safety = SafetyPipeline(cfg)
+        self.manual = ManualStage(cfg, store)
         self.cycles = 0
         self.optimise_job = OffLoopJob("optimisation")
         self.calibrate_job = OffLoopJob("calibration update")
         self.store_job = OffLoopJob("store")
         self._last_written: Command | None = None
-        self._last_verified: Command | None = None
+        #: Where the actuators should be: the last verified write, or the position a hold
+        #: took over; None after an unverified write (no manual-move detection then).
+        self._expected: Command | None = None
         self._writes_failing = 0  # consecutive failed writes: the first is logged loudly
+        self._grid0_s: float | None = None  # the first cycle's slot on the monotonic grid
+        self._clock_watch = WallClockWatch()
         self._configure(cfg)
 
     def _configure(self, cfg: PanelConfig) -> None:
@@ -189,6 +130,7 @@ class Controller:
         """Switch to a reloaded, validated configuration between cycles."""
         self.quality.settings = cfg.daemon.quality
         self.safety.reconfigure(cfg)
+        self.manual.reconfigure(cfg)
         self._configure(cfg)
         return self.calibration.reconfigure(cfg, LumpedModel(cfg))
 
@@ -199,17 +141,24 @@ class Controller:
         t: dict[str, float] = {}
         t0 = time.perf_counter()
         now_s = self.clock.wall()
+        events = self._clock_events(now_s)
+        if self._grid0_s is None:
+            self._grid0_s = slot.deadline_s
         if slot.skipped:
             self.observer.reset()  # the prediction spans one step; a gap restarts it
 
-        sample, current, override = await self._read(now_s)
+        got = await self._read(now_s)
         plant_heat = self.plant_heat_j() if self.plant_heat_j is not None else None
         t["read"] = _ms(t0)
         mark = time.perf_counter()
-        report = self.quality.check(sample, age_s=t["read"] / 1e3)
+        report = self.quality.check(got.sample, age_s=t["read"] / 1e3)
         checked = report.sample
         t["quality"] = _ms(mark)
 
+        held = self._hold_update(slot, now_s, got)
+        hold = held.hold
+        # While held, the positions read back are what the panel got.
+        current = got.read_back or self._expected or self._last_written
         mark = time.perf_counter()
         weather = measured_weather(self.cfg, checked)
         estimate = self._estimate(checked, weather, current)
@@ -223,15 +172,18 @@ class Controller:
         heating = (None if weather.inputs is None
                    else is_heating(self.cfg.control, float(weather.inputs.t_out_k[0])))
         forecast = None if weather.inputs is None else self._forecast(weather.inputs, now_s)
-        decision, method, fallback, no_decision = await self._decide(
-            weather, estimate, current, checked, forecast, heating=bool(heating))
+        if hold is None:
+            decision, method, fallback, no_decision = await self._decide(
+                weather, estimate, current, checked, forecast, heating=bool(heating))
+        else:  # a person has the panel: nothing to optimise
+            decision, method, fallback, no_decision = None, "manual", "", ""
         t["decide"] = _ms(mark)
 
         mark = time.perf_counter()
         wind = checked.good("wind_speed_ms")
         ctx = SafetyContext(now_s=self.clock.monotonic(), wind_speed_ms=wind,
                             bad_signals=frozenset(report.flags), current=current,
-                            no_decision_reason=no_decision)
+                            no_decision_reason=no_decision, hold=hold)
         proposal = None if decision is None else _command_or_none(decision)
         safe = self.safety.apply(proposal, ctx)
         if safe.faulted:  # the faults stage replaced the decision
@@ -239,9 +191,13 @@ class Controller:
         t["safety"] = _ms(mark)
 
         mark = time.perf_counter()
-        write, status = await self._write(safe.command)
+        if safe.write:
+            write, status = await self._write(safe.command)
+        else:
+            write, status = None, "held"
         t["write"] = _ms(mark)
-        applied = safe.command if status != "dry-run" else current
+        # Held or a dry run: the positions read back are what the panel got.
+        applied = safe.command if status not in ("dry-run", "held") else current
         self.calibration.set_controls(applied)
 
         mark = time.perf_counter()
@@ -253,22 +209,52 @@ class Controller:
             method=method, command=safe.command, proposed=decision, fallback=fallback,
             heating=heating,
             safety=safe, write_status=status, write=write, quality=report,
-            calibration=calibration, timings_ms=t, manual_override=override,
+            calibration=calibration, timings_ms=t, manual_override=bool(held.moved),
             estimate=estimate, applied=applied, horizon_x_k=horizon_x,
             horizon_s=self.cfg.control.horizon_steps * self.cfg.model.step_s,
-            plant_heat_j=plant_heat)
+            plant_heat_j=plant_heat, hold=hold,
+            run_elapsed_s=round(slot.deadline_s - self._grid0_s, 6),
+            events=[*events, *held.events, *_drain(self.calibration.events)],
+            command_results=held.results)
         mark = time.perf_counter()
         outcome.store_ok = await self._store(outcome, weather)
         t["store"] = _ms(mark)
         t["total"] = _ms(t0)
         return outcome
 
-    async def _read(self, now_s: float) -> tuple[Sample, Command | None, bool]:
-        """Sample, actuator position now, and whether it moved without us (manual)."""
+    def _clock_events(self, now_s: float) -> list[tuple[str, str, str]]:
+        """A wall-clock step since the last cycle: logged, an event, and the calibration
+        record restarted (rows on two time lines cannot be cut into model steps)."""
+        step = self._clock_watch.step(self.clock.monotonic(), now_s)
+        if step is None:
+            return []
+        self.calibration.restart_record()
+        why = (f"wall clock stepped by {step:+.1f} s since the last cycle (NTP or RTC); the "
+               "cycle grid runs on the monotonic clock and is unchanged; the calibration "
+               "record restarts")
+        log.warning(why, step_s=round(step, 3))
+        return [("warning", "clock_step", why)]
+
+    def _hold_update(self, slot: Slot, now_s: float, got: _Reading) -> HoldUpdate:
+        up = self.manual.update(now_mono_s=slot.deadline_s, now_s=now_s,
+                                read_back=got.read_back, expected=self._expected,
+                                input_active=got.input_active,
+                                input_where=self.driver.override_input or "")
+        if up.adopted:
+            self._expected = got.read_back  # the panel is where the person put it
+        self.manual.handled(up.results)
+        for level, kind, message in up.events:
+            log.log(logging.WARNING if level == "warning" else logging.INFO, message,
+                    event_kind=kind)
+        return up
+
+    async def _read(self, now_s: float) -> _Reading:
+        """Sample, actuator position now, and the override input."""
         try:
             async with asyncio.timeout(self.read_budget_s):
-                sample, actuators = await asyncio.gather(self.driver.read(now_s),
-                                                         self.driver.read_actuators())
+                sample, actuators, active = await asyncio.gather(
+                    self.driver.read(now_s), self.driver.read_actuators(),
+                    self.driver.read_override_input())
         except Exception as exc:  # the drivers should not raise; the loop must not die
             if isinstance(exc, TimeoutError):
                 why, quality = f"read exceeded its budget of {self.read_budget_s:g} s", \
@@ -278,16 +264,8 @@ class Controller:
                 why, quality = f"read failed: {type(exc).__name__}: {exc}", Quality.DEVICE_ERROR
             sample = Sample(now_s, {n: Reading.bad(quality, "daemon", why)
                                     for n in self.driver.sensor_names})
-            actuators = {}
-        read_back = command_from_values(actuators)
-        override = False
-        verified = self._last_verified
-        if read_back is not None and verified is not None and read_back != verified:
-            override = True
-            log.warning("actuators at %s, not the verified %s: moved by someone else "
-                        "(manual override?)", read_back.as_dict(), verified.as_dict())
-        current = read_back or self._last_verified or self._last_written
-        return sample, current, override
+            actuators, active = {}, None
+        return _Reading(sample, command_from_values(actuators), active)
 
     def _estimate(self, checked: Sample, weather: CycleWeather, current: Command | None
                   ) -> StateEstimate:
@@ -396,11 +374,11 @@ class Controller:
                 log.info("commands verified again after %d failed write(s)",
                          self._writes_failing)
             self._writes_failing = 0
-            self._last_verified = cmd
+            self._expected = cmd
             return result, "verified"
-        # A failed verification is not a manual override: forget the verified position, so
+        # A failed verification is not a manual override: forget the expected position, so
         # the next read-back is not compared with a command that may never have arrived.
-        self._last_verified = None
+        self._expected = None
         self._writes_failing += 1
         log.log(logging.WARNING if self._writes_failing == 1 else logging.DEBUG,
                 "command %s not verified: %s", cmd.as_dict(),
@@ -409,12 +387,25 @@ class Controller:
         return result, "failed"
 
     async def _store(self, out: CycleOutcome, weather: CycleWeather) -> bool:
-        record = cycle_record(out, weather, self.calibration)
-        _, why = await self.store_job.run(lambda: self.store.append(record),
-                                          budget_s=self.cfg.daemon.store_budget_s)
-        if why:
-            log.error("cycle %d not stored: %s", out.cycle, why)
-        return not why
+        """Queue the cycle's rows and write what waits; a failed write keeps them queued."""
+        buffer = self.store.buffer
+        buffer.enqueue(cycle_record(out, weather, self.calibration))
+        written, why = await self.store_job.run(buffer.flush,
+                                                budget_s=self.cfg.daemon.store_budget_s)
+        if written:
+            return True
+        waiting = buffer.waiting
+        failure = buffer.failure[1] if buffer.failure else why
+        log.log(logging.ERROR if waiting <= 1 else logging.DEBUG,
+                "cycle %d not stored yet: %s; %d cycle(s) wait in memory (at most %d)",
+                out.cycle, failure or "store busy", waiting, buffer.capacity)
+        return False
+
+
+def _drain(items: list[T]) -> list[T]:
+    out = list(items)
+    items.clear()
+    return out
 
 
 def _ms(start: float) -> float:

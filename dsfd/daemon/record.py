@@ -11,7 +11,7 @@ from dsfd.storage.timeseries import CycleRecord
 
 if TYPE_CHECKING:
     from dsfd.daemon.calibration import CalibrationStage
-    from dsfd.daemon.loop import CycleOutcome
+    from dsfd.daemon.outcome import CycleOutcome
     from dsfd.daemon.weather import CycleWeather
 
 __all__ = ["cycle_record"]
@@ -46,25 +46,27 @@ def cycle_record(out: CycleOutcome, weather: CycleWeather, calibration: Calibrat
         "trace": trace, "timings_ms": out.timings_ms,
         "cycle_ms": sum(v for k, v in out.timings_ms.items() if k != "total"),
         "skipped_slots": out.skipped_slots,
+        "run_elapsed_s": out.run_elapsed_s,
+        "hold_source": None if out.hold is None else out.hold.source,
+        "hold_expires_s": None if out.hold is None else out.hold.expires_s,
+        "hold_command_id": None if out.hold is None else out.hold.command_id,
     }
     params = None
     cal = out.calibration
     if cal is not None and cal.updated:
         params = ("online", calibration.theta_by_name(), cal.cost, f"{cal.n_residuals} residuals")
     elif out.cycle == 1:
-        params = ("resumed" if calibration.resumed else "prior", calibration.theta_by_name(),
-                  None, calibration.resume_message)
-    events = []
-    if out.manual_override:
-        events.append(("warning", "manual_override", "actuators moved since the last "
-                       "verified write"))
+        params = (calibration.origin, calibration.theta_by_name(), None,
+                  calibration.resume_message)
+    events = list(out.events)
     for name in out.quality.new_faults:
         r = out.quality.sample.readings[name]
         events.append(("warning", "sensor_fault", f"{name}: {r.quality.value}: {r.detail}"))
     for name in out.quality.recovered:
         events.append(("info", "sensor_recovered", name))
     return CycleRecord(cycle=out.cycle, time_s=out.time_s, samples=samples, decision=decision,
-                       parameters=params, events=events, model=model_row(out))
+                       parameters=params, events=events, model=model_row(out),
+                       command_results=out.command_results)
 
 
 def model_row(out: CycleOutcome) -> dict[str, Any]:

@@ -2,8 +2,10 @@
 
 Start-up order matters: the configuration (and the run-time checks below) is validated
 before anything is opened, so a bad file exits non-zero naming the key path without
-touching a device; then the state directory, the database and the calibration state; then
-the drivers; then ``READY=1``.
+touching a device; then the state directory's lock (a second daemon on the same directory
+stops here, naming the holder's PID, before it opens anything); then the database and the
+calibration state; then a manual hold the previous run left active; then the drivers; then
+``READY=1``.
 
 Signals: SIGTERM/SIGINT stop after the current cycle (``STOPPING=1``, the run is marked
 ended in the database, the summary printed); SIGHUP reloads the file between cycles
@@ -17,32 +19,28 @@ from __future__ import annotations
 import asyncio
 import dataclasses
 import logging
-import os
 import signal
-import tempfile
+import sqlite3
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Protocol
 
 from dsfd import __version__
-from dsfd.config import ConfigError, ConfigIssue, PanelConfig, load_panel
+from dsfd.config import ConfigError, ConfigIssue, PanelConfig
 from dsfd.daemon.calibration import CalibrationStage
 from dsfd.daemon.clock import Clock, CycleGrid, RealClock, SimulatedClock, Slot
 from dsfd.daemon.logging_setup import bind_contextvars, bound_contextvars, get_logger
-from dsfd.daemon.loop import (
-    DEFAULT_READ_BUDGET_S,
-    DEFAULT_WRITE_BUDGET_S,
-    Controller,
-    CycleOutcome,
-)
-from dsfd.daemon.metrics import MetricsFile, metrics_problem
+from dsfd.daemon.loop import Controller, CycleOutcome
+from dsfd.daemon.metrics import MetricsFile
 from dsfd.daemon.notify import Notifier
+from dsfd.daemon.startup import load_for_run, runtime_problems
 from dsfd.daemon.summary import RunSummary
 from dsfd.drivers.base import Driver
 from dsfd.measured import iso_utc
 from dsfd.physics.model import LumpedModel
-from dsfd.signals import ACTUATOR_NAMES
+from dsfd.storage.lock import StateLock
+from dsfd.storage.queries import last_decision, parameter_history
 from dsfd.storage.timeseries import Store
 
 __all__ = ["Integration", "PlantUnderTest", "RunOptions", "load_for_run", "runtime_problems",
@@ -124,77 +122,6 @@ class RunOptions:
         return "dry run, hardware read-only" if self.dry_run else "hardware"
 
 
-def runtime_problems(cfg: PanelConfig, *, simulated_plant: bool, dry_run: bool
-                     ) -> list[ConfigIssue]:
-    """Checks that only ``dsfd run`` needs (key paths as in the YAML file)."""
-    out: list[ConfigIssue] = []
-    d = cfg.daemon
-    if abs(d.cycle_period_s - cfg.model.step_s) > 1e-9:
-        out.append(ConfigIssue("daemon.cycle_period_s", d.cycle_period_s,
-                               f"must equal model.step_s ({cfg.model.step_s:g} s): the "
-                               "observer and the calibrator predict one model step per cycle"))
-    dev = cfg.devices
-    read_s = dev.read_budget_s if dev else DEFAULT_READ_BUDGET_S
-    write_s = dev.write_budget_s if dev else DEFAULT_WRITE_BUDGET_S
-    parts = {"devices.read_budget_s": read_s, "daemon.calibrate_budget_s": d.calibrate_budget_s,
-             "control.time_budget_s": cfg.control.time_budget_s,
-             "devices.write_budget_s": write_s, "daemon.store_budget_s": d.store_budget_s}
-    if sum(parts.values()) > d.cycle_period_s:
-        shown = " + ".join(f"{k} {v:g}" for k, v in parts.items())
-        out.append(ConfigIssue("daemon.cycle_period_s", d.cycle_period_s,
-                               f"the stage budgets do not fit into one cycle ({shown} = "
-                               f"{sum(parts.values()):g} s)"))
-    metrics = metrics_problem(d.metrics_file)
-    if metrics:
-        out.append(ConfigIssue("daemon.metrics_file", d.metrics_file, metrics))
-    if simulated_plant:
-        return out
-    if dev is None:
-        out.append(ConfigIssue("devices", None, "required to run against hardware: describe "
-                               "the Modbus devices and the weather station (or use --plant "
-                               "sim for a simulated plant)"))
-        return out
-    delivered = {s for e in dev.entries for s in e.signal_names()}
-    for i, name in enumerate(cfg.safety.fault_signals):
-        if name not in delivered:
-            out.append(ConfigIssue(f"safety.fault_signals[{i}]", name,
-                                   "no device in devices.entries delivers this sensor, so the "
-                                   "daemon would only ever command the safe state"))
-    owned = {a.signal for e in dev.entries for a in e.actuators}
-    missing = [a for a in ACTUATOR_NAMES if a not in owned]
-    if missing and not dry_run:
-        out.append(ConfigIssue("devices.entries", [e.name for e in dev.entries],
-                               f"no device has a register for {', '.join(missing)}: the "
-                               "daemon cannot command the panel (or use --dry-run)"))
-    return out
-
-
-def load_for_run(path: Path, *, simulated_plant: bool, dry_run: bool) -> PanelConfig:
-    """Load and validate a panel file for ``dsfd run``; :class:`ConfigError` names key paths."""
-    cfg = load_panel(path)
-    issues = runtime_problems(cfg, simulated_plant=simulated_plant, dry_run=dry_run)
-    if issues:
-        raise ConfigError(issues, str(path))
-    return cfg
-
-
-def resolve_state_dir(opts: RunOptions, cfg: PanelConfig) -> tuple[Path, bool]:
-    """The state directory and whether it is a temporary one (simulated dry runs only)."""
-    if opts.state_dir is not None:
-        return opts.state_dir, False
-    if cfg.daemon.state_directory:
-        return Path(cfg.daemon.state_directory), False
-    env = os.environ.get("STATE_DIRECTORY", "")
-    if env:
-        return Path(env.split(":")[0]), False  # systemd lists several, colon-separated
-    if opts.simulated_plant:
-        return Path(tempfile.mkdtemp(prefix=f"dsfd-{cfg.panel.id}-")), True
-    raise ConfigError([ConfigIssue(
-        "daemon.state_directory", None, "no state directory: set it here, pass --state-dir, "
-        "or run under systemd with StateDirectory= (sets $STATE_DIRECTORY)")],
-        str(opts.config_path))
-
-
 class _Daemon:
     def __init__(self, opts: RunOptions, cfg: PanelConfig, clock: Clock, driver: Driver,
                  store: Store, controller: Controller, notifier: Notifier,
@@ -266,7 +193,9 @@ class _Daemon:
                  calibration="not due" if out.calibration is None else (
                      "updated" if out.calibration.updated else out.calibration.skipped),
                  read_ms=t.get("read"), decide_ms=t.get("decide"), cycle_ms=t.get("total"),
-                 skipped=out.skipped_slots or None)
+                 skipped=out.skipped_slots or None,
+                 hold=None if out.hold is None else out.hold.describe(),
+                 stored=None if out.store_ok else f"waiting ({self.store.buffer.waiting})")
         self.notifier.watchdog(f"cycle {out.cycle}: {out.method}, louver {c.phi_deg:+.0f} deg, "
                                f"regime {c.afr}, dampers {c.or_pct:g} %, "
                                f"write {out.write_status}")
@@ -325,6 +254,7 @@ class _Daemon:
         note = self.controller.reconfigure(new)
         if new.daemon.metrics_file != self.cfg.daemon.metrics_file:
             self.metrics = _metrics_file(new)
+        self.store.buffer.capacity = new.daemon.store_buffer_cycles
         self.cfg = new
         log.info("configuration reloaded", file=str(path), calibration=note,
                  after_cycle=self.controller.cycles)
@@ -362,45 +292,61 @@ def limit_malloc_arenas(arenas: int = 1) -> bool:
 async def serve(opts: RunOptions, cfg: PanelConfig, *, state_dir: Path,
                 plant: PlantUnderTest | None = None,
                 integrations: Sequence[Integration] = (),
-                print_line: Callable[[str], None] = print) -> RunSummary:
+                print_line: Callable[[str], None] = print,
+                clock: Clock | None = None) -> RunSummary:
     """Run the daemon until the cycles are done or a signal stops it; return the summary.
 
     ``plant`` is the simulated plant of ``--plant sim`` (its driver replaces the devices and
     the clock starts at its start); without it the panel's ``devices:`` are opened.
     ``integrations`` (the MQTT publisher) run beside the loop, fed from the database.
+    ``clock`` replaces the daemon's clock (tests that step the wall clock).
+
+    Raises :class:`~dsfd.storage.lock.StateDirBusyError` before anything is opened if
+    another process controls ``state_dir``.
     """
+    lock = StateLock.acquire(state_dir)  # one controller per state directory, first of all
+    try:
+        return await _serve_locked(opts, cfg, state_dir=state_dir, plant=plant,
+                                   integrations=integrations, print_line=print_line,
+                                   clock=clock)
+    finally:
+        lock.release()
+
+
+async def _serve_locked(opts: RunOptions, cfg: PanelConfig, *, state_dir: Path,
+                        plant: PlantUnderTest | None, integrations: Sequence[Integration],
+                        print_line: Callable[[str], None], clock: Clock | None
+                        ) -> RunSummary:
     limit_malloc_arenas()
+    # A file-size limit (RLIMIT_FSIZE) must fail a write with EFBIG, not kill the daemon.
+    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
     bind_contextvars(panel=cfg.panel.id)
     notifier = Notifier()
-    clock: Clock
     if plant is not None:
-        clock = SimulatedClock(start_utc_s=plant.start_s, speed=opts.speed)
+        clock = clock or SimulatedClock(start_utc_s=plant.start_s, speed=opts.speed)
         driver: Driver = plant.driver
         for note in plant.notes:
             print_line(f"  {note}")
     else:
         from dsfd.drivers.factory import build_drivers
 
-        clock = RealClock() if opts.speed is None else SimulatedClock(
+        clock = clock or (RealClock() if opts.speed is None else SimulatedClock(
             start_utc_s=opts.start_s if opts.start_s is not None else RealClock().wall(),
-            speed=opts.speed)
+            speed=opts.speed))
         assert cfg.devices is not None  # runtime_problems guarantees it
         driver = build_drivers(cfg.devices, clock=clock.monotonic)
-    store = Store.open(state_dir)
-    store.begin_run(panel=cfg.panel.id, mode=opts.mode, version=__version__,
-                    config_path=str(opts.config_path), config=dataclasses.asdict(cfg))
-    if store.moved_aside is not None:
-        log.error("database was unusable and was moved aside; started a new one",
-                  moved_to=str(store.moved_aside))
-        store.event(cycle=0, time_s=clock.wall(), level="error", kind="database_recovered",
-                    message=f"corrupt database moved to {store.moved_aside.name}")
-    calibration = CalibrationStage(cfg, LumpedModel(cfg), state_dir=state_dir)
-    log.info(calibration.resume_message, theta=calibration.theta_by_name())
+    store, calibration = _open_state(opts, cfg, state_dir, clock)
     # A dry run never writes to hardware; an in-process simulated plant may follow.
     write_enabled = not opts.dry_run or not getattr(driver, "hardware", True)
     controller = Controller(cfg, driver=driver, clock=clock, store=store,
                             calibration=calibration, write_enabled=write_enabled,
                             plant_heat_j=None if plant is None else plant.room_heat_now)
+    restored = controller.manual.restore(_last_decision(store), now_mono_s=clock.monotonic(),
+                                         now_s=clock.wall())
+    if restored:
+        log.warning("manual hold of the previous run restored: %s", restored)
+        store.event(cycle=0, time_s=clock.wall(), level="info", kind="hold_restored",
+                    message=restored)
     daemon = _Daemon(opts, cfg, clock, driver, store, controller, notifier, integrations)
     daemon.summary.start_calibration(calibration)
     loop = asyncio.get_running_loop()
@@ -422,7 +368,13 @@ async def serve(opts: RunOptions, cfg: PanelConfig, *, state_dir: Path,
         notifier.stopping(f"stopping: {reason}")
         for sig in (signal.SIGTERM, signal.SIGINT, signal.SIGHUP):
             loop.remove_signal_handler(sig)
-        store.end_run(reason=reason, cycles=daemon.summary.cycles)
+        try:
+            store.end_run(reason=reason, cycles=daemon.summary.cycles)
+        except sqlite3.Error as exc:
+            log.error("run end not recorded: %s", exc)
+        if store.buffer.waiting:
+            log.error("%d cycle(s) could not be written before the stop",
+                      store.buffer.waiting)
         try:
             await driver.close()
         finally:
@@ -438,3 +390,33 @@ async def serve(opts: RunOptions, cfg: PanelConfig, *, state_dir: Path,
     log.info("daemon stopped", reason=reason, cycles=daemon.summary.cycles,
              cycle_failures=daemon.cycle_failures)
     return daemon.summary
+
+
+def _open_state(opts: RunOptions, cfg: PanelConfig, state_dir: Path, clock: Clock
+                ) -> tuple[Store, CalibrationStage]:
+    """The database (a corrupt one moved aside) and the calibration state (from the file,
+    else the database's parameter history, else the priors)."""
+    store = Store.open(state_dir, buffer_cycles=cfg.daemon.store_buffer_cycles)
+    store.begin_run(panel=cfg.panel.id, mode=opts.mode, version=__version__,
+                    config_path=str(opts.config_path), config=dataclasses.asdict(cfg))
+    if store.moved_aside is not None:
+        log.error("database was unusable and was moved aside; started a new one",
+                  moved_to=str(store.moved_aside))
+        store.event(cycle=0, time_s=clock.wall(), level="error", kind="database_recovered",
+                    message=f"corrupt database moved to {store.moved_aside.name}")
+    calibration = CalibrationStage(
+        cfg, LumpedModel(cfg), state_dir=state_dir,
+        history=lambda: parameter_history(store.reader(), cfg.panel.id))
+    if calibration.events:
+        log.warning(calibration.resume_message, theta=calibration.theta_by_name(),
+                    origin=calibration.origin)
+    else:
+        log.info(calibration.resume_message, theta=calibration.theta_by_name())
+    return store, calibration
+
+
+def _last_decision(store: Store) -> dict[str, object] | None:
+    try:
+        return last_decision(store.reader())
+    except sqlite3.Error:
+        return None

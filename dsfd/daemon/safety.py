@@ -2,18 +2,27 @@
 
 Stages, highest priority first; each records what it set and why (the decision trace):
 
-1. **faults** — no decision could be made (inputs missing) or a ``safety.fault_signals``
-   sensor is not GOOD → the configured safe state;
-2. **wind** — station wind above ``wind_limit_ms`` → louver to the wind-safe angle and exterior
+1. **wind** — station wind above ``wind_limit_ms`` → louver to the wind-safe angle and exterior
    dampers closed, until the wind stayed below the limit minus the hysteresis for
-   ``wind_release_cycles`` cycles; unknown wind acts per ``wind_unknown``;
-3. **limits** — louver angle inside the mechanical limits, damper opening inside
+   ``wind_release_cycles`` cycles; unknown wind acts per ``wind_unknown``. A person's hold
+   never stops the façade from protecting itself;
+2. **hold** — a manual hold (:mod:`dsfd.daemon.hold`) replaces the proposal by the held
+   position. Unless the wind acts or the held position differs from the read-back (an
+   operator's positions, or the position to restore after a wind override), nothing is
+   written; the stages below do not touch a person's position;
+3. **faults** — no decision could be made (inputs missing) or a ``safety.fault_signals``
+   sensor is not GOOD → the configured safe state;
+4. **limits** — louver angle inside the mechanical limits, damper opening inside
    0..``or_max_pct``, no opening in the closed regime;
-4. **quantisation** — louver angle onto the motor's grid (18° steps) inside the limits,
+5. **quantisation** — louver angle onto the motor's grid (18° steps) inside the limits,
    damper opening onto its resolution ``or_step_pct``;
-5. **rate** — at most one louver move per ``min_louver_move_interval_s`` and no damper moves
-   smaller than ``or_deadband_pct`` (stages 1–2 bypass this: safety first);
-6. **regimes** — a regime whose dampers the panel lacks becomes the closed regime.
+6. **rate** — at most one louver move per ``min_louver_move_interval_s`` and no damper moves
+   smaller than ``or_deadband_pct`` (wind and faults bypass this: safety first);
+7. **regimes** — a regime whose dampers the panel lacks becomes the closed regime.
+
+The command values are built in that priority: the base (held position, else the safe state
+on a fault, else the proposal), the wind's changes on top, then the mechanical stages. The
+trace lists the stages in priority order.
 
 Pure: no I/O, no clock; the loop passes the time and the measured wind.
 """
@@ -26,11 +35,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from dsfd.config.panel import REGIME_OPENINGS, PanelConfig
+from dsfd.daemon.hold import Hold
 from dsfd.drivers.base import Command
 
-__all__ = ["CLOSED", "SafetyContext", "SafetyPipeline", "SafetyResult", "TraceEntry"]
+__all__ = ["CLOSED", "STAGES", "SafetyContext", "SafetyPipeline", "SafetyResult", "TraceEntry"]
 
 CLOSED = 10
+#: The stages in priority order (the order of the trace).
+STAGES = ("wind", "hold", "faults", "limits", "quantisation", "rate", "regimes")
 _EXTERIOR = frozenset({"exterior_bottom", "exterior_top"})
 
 
@@ -62,6 +74,8 @@ class SafetyContext:
         Actuator position now (device read-back, else the last command written).
     no_decision_reason : str
         Non-empty if neither the optimiser nor the baseline could decide.
+    hold : Hold or None
+        The active manual hold, if any.
     """
 
     now_s: float
@@ -69,6 +83,7 @@ class SafetyContext:
     bad_signals: frozenset[str] = frozenset()
     current: Command | None = None
     no_decision_reason: str = ""
+    hold: Hold | None = None
 
 
 @dataclass(frozen=True)
@@ -83,6 +98,10 @@ class SafetyResult:
     wind_override: bool
     #: True if the faults stage commanded the safe state.
     faulted: bool = False
+    #: True while a manual hold is active.
+    held: bool = False
+    #: False if nothing is to be written (held in place, no wind).
+    write: bool = True
 
     def trace_dicts(self) -> list[dict[str, object]]:
         return [t.as_dict() for t in self.trace]
@@ -101,6 +120,10 @@ class _Draft:
             setattr(self, k, int(v) if k == "afr" else float(v))
         self.trace.append(TraceEntry(stage, changed, why))
 
+    def ordered(self) -> tuple[TraceEntry, ...]:
+        """The trace in priority order (stages run in the order their values need)."""
+        return tuple(sorted(self.trace, key=lambda t: STAGES.index(t.stage)))
+
 
 class SafetyPipeline:
     """Applies the stages in order; keeps the wind-override and louver-move state."""
@@ -118,24 +141,53 @@ class SafetyPipeline:
 
     def apply(self, proposal: Command | None, ctx: SafetyContext) -> SafetyResult:
         """Run every stage on ``proposal`` (None: nothing could be decided)."""
-        s = self.cfg.safety
-        safe = s.safe_state
+        wind_why = self._wind_state(ctx)
+        if ctx.hold is not None:
+            return self._held(ctx, wind_why)
+        safe = self.cfg.safety.safe_state
         if proposal is None:
             d = _Draft(safe.phi_deg, safe.afr, safe.or_pct)
         else:
             d = _Draft(proposal.phi_deg, proposal.afr, proposal.or_pct)
+        d.set("hold", "no manual hold")
         faulted = self._faults(d, proposal, ctx)
-        overridden = self._wind(d, ctx) or faulted
+        overridden = self._wind(d, wind_why) or faulted
         self._limits(d)
         self._quantise(d)
         self._rate(d, ctx, overridden)
         self._regimes(d)
         cmd = Command(phi_deg=d.phi_deg, afr=d.afr, or_pct=d.or_pct)
+        self._note_move(cmd, ctx)
+        return SafetyResult(cmd, d.ordered(), overridden, self.wind_override, faulted)
+
+    def _held(self, ctx: SafetyContext, wind_why: str) -> SafetyResult:
+        """A manual hold: the held position, changed only by the wind."""
+        hold = ctx.hold
+        assert hold is not None
+        safe = self.cfg.safety.safe_state
+        base = hold.position or ctx.current or Command(phi_deg=safe.phi_deg, afr=safe.afr,
+                                                       or_pct=safe.or_pct)
+        d = _Draft(base.phi_deg, base.afr, base.or_pct)
+        d.trace.append(TraceEntry("hold", base.as_dict(), f"{hold.describe()}: held "
+                                  "position, the optimiser does not decide"))
+        wind = self._wind(d, wind_why)
+        cmd = Command(phi_deg=d.phi_deg, afr=d.afr, or_pct=d.or_pct)
+        write = wind or (ctx.current is not None and cmd != ctx.current)
+        skipped = "manual hold: a person's position is not changed"
+        for stage in ("faults", "limits", "quantisation", "rate", "regimes"):
+            d.set(stage, skipped)
+        if write:
+            self._note_move(cmd, ctx)
+        elif ctx.current is not None:
+            cmd = ctx.current  # held in place: record where it actually is
+        return SafetyResult(cmd, d.ordered(), wind, self.wind_override, False, held=True,
+                            write=write)
+
+    def _note_move(self, cmd: Command, ctx: SafetyContext) -> None:
         if ctx.current is not None and cmd.phi_deg != ctx.current.phi_deg:
             self.last_louver_move_s = ctx.now_s
         elif ctx.current is None:
             self.last_louver_move_s = ctx.now_s  # position unknown: this write moves it
-        return SafetyResult(cmd, tuple(d.trace), overridden, self.wind_override, faulted)
 
     # ------------------------------------------------------------------ stages
     def _faults(self, d: _Draft, proposal: Command | None, ctx: SafetyContext) -> bool:
@@ -152,34 +204,35 @@ class SafetyPipeline:
               or_pct=safe.or_pct)
         return True
 
-    def _wind(self, d: _Draft, ctx: SafetyContext) -> bool:
+    def _wind_state(self, ctx: SafetyContext) -> str:
+        """Update the wind override from this cycle's wind; why it is (not) active."""
         s = self.cfg.safety
         wind = ctx.wind_speed_ms
         release = s.wind_limit_ms - s.wind_hysteresis_ms
         if wind is None or not math.isfinite(wind):
             if s.wind_unknown == "safe":
                 self.wind_override, self._calm_cycles = True, 0
-                why = "wind speed unknown -> treated as above the limit"
-            else:
-                why = f"wind speed unknown -> override {'kept' if self.wind_override else 'off'}"
-        elif wind > s.wind_limit_ms:
+                return "wind speed unknown -> treated as above the limit"
+            return f"wind speed unknown -> override {'kept' if self.wind_override else 'off'}"
+        if wind > s.wind_limit_ms:
             self.wind_override, self._calm_cycles = True, 0
-            why = f"wind {wind:.1f} m/s above {s.wind_limit_ms:g} m/s"
-        elif self.wind_override and wind < release:
+            return f"wind {wind:.1f} m/s above {s.wind_limit_ms:g} m/s"
+        if self.wind_override and wind < release:
             self._calm_cycles += 1
             if self._calm_cycles >= s.wind_release_cycles:
                 self.wind_override = False
-                why = (f"wind {wind:.1f} m/s below {release:g} m/s for "
-                       f"{self._calm_cycles} cycles -> override released")
-            else:
-                why = (f"wind {wind:.1f} m/s below {release:g} m/s for {self._calm_cycles}/"
-                       f"{s.wind_release_cycles} cycles -> override held")
-        elif self.wind_override:
+                return (f"wind {wind:.1f} m/s below {release:g} m/s for "
+                        f"{self._calm_cycles} cycles -> override released")
+            return (f"wind {wind:.1f} m/s below {release:g} m/s for {self._calm_cycles}/"
+                    f"{s.wind_release_cycles} cycles -> override held")
+        if self.wind_override:
             self._calm_cycles = 0
-            why = f"wind {wind:.1f} m/s inside the hysteresis band -> override held"
-        else:
-            d.set("wind", f"wind {wind:.1f} m/s below {s.wind_limit_ms:g} m/s")
-            return False
+            return f"wind {wind:.1f} m/s inside the hysteresis band -> override held"
+        return f"wind {wind:.1f} m/s below {s.wind_limit_ms:g} m/s"
+
+    def _wind(self, d: _Draft, why: str) -> bool:
+        """Apply an active wind override to the draft."""
+        s = self.cfg.safety
         if not self.wind_override:
             d.set("wind", why)
             return False

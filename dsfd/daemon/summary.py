@@ -13,11 +13,12 @@ from typing import TYPE_CHECKING
 
 from dsfd.config.panel import REGIME_NAMES
 from dsfd.daemon.loop import CycleOutcome
+from dsfd.estimation.params import FIT_NAMES, ParameterSpace
 
 if TYPE_CHECKING:
     from dsfd.daemon.calibration import CalibrationStage
 
-__all__ = ["REGIME_NAMES", "RunSummary"]
+__all__ = ["REGIME_NAMES", "RunSummary", "at_bound"]
 
 #: Heat flows into the room reported by the simulated plant, and how they are printed.
 _HEAT_LABELS = {"q_sol_trans": "solar transmitted", "q_cv_rd": "convection+long-wave",
@@ -106,12 +107,7 @@ class RunSummary:
                room_heat_h: float = 0.0) -> None:
         """Note the final parameters and, for a simulated plant, the heat into the room."""
         self.theta_end = stage.theta_by_name()
-        space = stage.space
-        self.at_bound = tuple(
-            name for name, v, lo, hi, fixed in zip(self.theta_end, self.theta_end.values(),
-                                                    space.lower, space.upper, space.fixed,
-                                                    strict=True)
-            if not fixed and lo < hi and (v <= lo + 1e-6 * abs(lo) or v >= hi - 1e-6 * abs(hi)))
+        self.at_bound = at_bound(self.theta_end, stage.space)
         if room_heat_j is not None:
             self.room_heat_j = dict(room_heat_j)
             self.room_heat_h = room_heat_h
@@ -225,8 +221,23 @@ class RunSummary:
         return out
 
 
+def at_bound(theta: Mapping[str, float], space: ParameterSpace) -> tuple[str, ...]:
+    """Free parameters of the fit vector (by name, in ``FIT_NAMES`` order) sitting at a
+    bound of ``space`` (relative tolerance 1e-6)."""
+    out = []
+    for name, lo, hi, fixed in zip(FIT_NAMES, space.lower, space.upper, space.fixed,
+                                   strict=True):
+        v = theta.get(name)
+        if v is None or fixed or not lo < hi:
+            continue
+        if v <= lo + 1e-6 * abs(lo) or v >= hi - 1e-6 * abs(hi):
+            out.append(name)
+    return tuple(out)
+
+
 #: How the decision methods read in the summary.
-_METHODS = {"mpc": "optimiser", "rule": "rule-based baseline", "safe": "safe position"}
+_METHODS = {"mpc": "optimiser", "rule": "rule-based baseline", "safe": "safe position",
+            "manual": "manual hold"}
 
 
 def _num(v: float) -> str:

@@ -250,6 +250,16 @@ class Driver(Protocol):
         """The device's current command if all three actuators are readable, else None."""
         ...
 
+    @property
+    def override_input(self) -> str | None:
+        """Where this driver reads the panel's hand/auto input (None: it has none)."""
+        ...
+
+    async def read_override_input(self) -> bool | None:
+        """True while the override input is active, False if not, None if it could not be
+        read (or there is none)."""
+        ...
+
     async def close(self) -> None:
         """Release ports and connections; idempotent."""
         ...
@@ -309,6 +319,17 @@ class CompositeDriver:
 
     async def read_back(self) -> Command | None:
         return command_from_values(await self.read_actuators())
+
+    @property
+    def override_input(self) -> str | None:
+        labels = [label for d in self.drivers if (label := d.override_input)]
+        return labels[0] if labels else None
+
+    async def read_override_input(self) -> bool | None:
+        for d in self.drivers:  # the configuration allows one override input per panel
+            if d.override_input:
+                return await d.read_override_input()
+        return None
 
     async def close(self) -> None:
         # Close every driver even if one fails, then report the first failure.

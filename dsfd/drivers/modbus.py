@@ -51,7 +51,7 @@ from dsfd.registers import (
 )
 
 if TYPE_CHECKING:
-    from dsfd.config.devices import DeviceConfig
+    from dsfd.config.devices import DeviceConfig, OverrideInput
 
 __all__ = ["ModbusDriver", "ModbusLink", "configure_pymodbus_logging"]
 
@@ -64,7 +64,7 @@ class ModbusDriver:
     def __init__(self, *, name: str, link: ModbusLink, device_id: int,
                  sensors: Sequence[RegisterPoint] = (), actuators: Sequence[RegisterPoint] = (),
                  timeout_s: float, retries: int, breaker: CircuitBreaker,
-                 max_read_gap: int = 0) -> None:
+                 max_read_gap: int = 0, override_input: OverrideInput | None = None) -> None:
         self.name = name
         self.link = link
         self.device_id = device_id
@@ -84,12 +84,14 @@ class ModbusDriver:
         self.counters: Counter[str] = Counter()
         self._label = f"{name} (id {device_id} on {link.key})"
         self._failing = False
+        self._override = override_input
 
     @classmethod
     def from_config(cls, cfg: DeviceConfig, link: ModbusLink) -> ModbusDriver:
         return cls(name=cfg.name, link=link, device_id=cfg.device_id,
                    sensors=cfg.sensor_points(), actuators=cfg.actuator_points(),
                    timeout_s=cfg.timeout_s, retries=cfg.retries, max_read_gap=cfg.max_read_gap,
+                   override_input=cfg.override_input,
                    breaker=CircuitBreaker(failures=cfg.breaker_failures,
                                           open_cycles=cfg.breaker_cycles))
 
@@ -339,6 +341,39 @@ class ModbusDriver:
 
     async def read_back(self) -> Command | None:
         return command_from_values(await self.read_actuators())
+
+    # ----------------------------------------------------------------------------- override
+    @property
+    def override_input(self) -> str | None:
+        oi = self._override
+        return None if oi is None else f"{self.name} {oi.where()}"
+
+    async def read_override_input(self) -> bool | None:
+        """The hand/auto input: a coil (FC 1), discrete input (FC 2) or holding register
+        (FC 3, active while non-zero), inverted if configured; None if unreadable."""
+        oi = self._override
+        if oi is None or self.breaker.is_open:
+            return None
+        client_call = {"coil": "read_coils", "discrete_input": "read_discrete_inputs",
+                       "holding": "read_holding_registers"}[oi.table]
+        async with self.link.lock:
+            try:
+                async with asyncio.timeout(self._bound(1)):
+                    if await self.link.ensure_connected() is not None:
+                        return None
+                    fn = getattr(self.link.client, client_call)
+                    pdu, _, why = await self._request(
+                        partial(fn, oi.address, count=1, device_id=self.device_id))
+            except TimeoutError:
+                self.link.drop()
+                return None
+        if pdu is None:
+            log.debug("modbus device %s: override input %s: %s", self.name, oi.where(), why)
+            return None
+        values = list(getattr(pdu, "registers" if oi.table == "holding" else "bits", []) or [])
+        if not values:
+            return None
+        return bool(values[0]) != oi.invert
 
 
 def _exception_name(code: int | None) -> str:

@@ -156,6 +156,13 @@ class SimulatedDriver:
     async def read_back(self) -> Command | None:
         return command_from_values(await self.read_actuators())
 
+    @property
+    def override_input(self) -> str | None:
+        return None
+
+    async def read_override_input(self) -> bool | None:
+        return None
+
     async def close(self) -> None:
         return None
 

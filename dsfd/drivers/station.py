@@ -311,6 +311,13 @@ class StationDriver:
     async def read_back(self) -> Command | None:
         return None
 
+    @property
+    def override_input(self) -> str | None:
+        return None
+
+    async def read_override_input(self) -> bool | None:
+        return None
+
     async def close(self) -> None:
         port, self._port = self._port, None
         if port is not None:

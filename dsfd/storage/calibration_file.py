@@ -5,7 +5,8 @@
   temporary file in the same directory, flush + fsync, ``os.replace``, fsync of the
   directory — so a crash at any instant leaves the old or the new file, never a torn one.
   :func:`load_state_or_prior` falls back to the panel priors, with a message saying why,
-  when the file is missing or unusable.
+  when the file is missing or unusable; the daemon moves an unusable file aside
+  (:func:`move_aside`, ``calibration.json.corrupt.<time>``) before it writes a new one.
 * Fitted parameters (``dsfd calibrate --out PARAMS.yaml``): the frozen off-line θ with its
   standard errors and the training period; read back by ``dsfd validate --params``.
 
@@ -16,6 +17,8 @@ from __future__ import annotations
 
 import json
 import math
+import os
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
@@ -84,6 +87,15 @@ def load_state_or_prior(path: str | Path, *, space: ParameterSpace,
         return (CalibrationState.initial(panel_id, space),
                 f"calibration state unusable, starting from the panel priors: {exc}")
     return state, f"resumed calibration state from {path} ({state.updates} updates)"
+
+
+def move_aside(path: str | Path) -> Path:
+    """Rename an unusable state file to ``<name>.corrupt.<UTC time>``; the new name."""
+    path = Path(path)
+    stamp = datetime.now(UTC).strftime("%Y%m%dT%H%M%S.%fZ")
+    target = path.with_name(f"{path.name}.corrupt.{stamp}")
+    os.replace(path, target)
+    return target
 
 
 # --------------------------------------------------------------------------- params file

@@ -5,7 +5,9 @@ flag, every decision with its safety trace and stage timings, the parameter hist
 notable events. One writer (the daemon), WAL journal, ``synchronous=NORMAL`` (a crash of the
 process never loses a committed cycle; a power cut may roll back the last few), and a
 ``busy_timeout`` so a reader (``sqlite3``, pandas) never makes a write fail. Each cycle is
-one transaction.
+one transaction. The daemon writes through :attr:`Store.buffer`
+(:class:`~dsfd.storage.buffer.WriteBuffer`): a write that fails (full disk) keeps the cycle
+waiting in memory instead of stopping control.
 
 A database that cannot be opened or fails its check (after a run that did not end cleanly)
 is moved aside with its ``-wal``/``-shm`` files as ``timeseries.sqlite.corrupt.<iso>`` and a
@@ -29,6 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from dsfd.config.panel import PARAMETER_NAMES
+from dsfd.storage.buffer import WriteBuffer
 
 __all__ = [
     "DB_NAME",
@@ -37,12 +40,13 @@ __all__ = [
     "MQTT_CURSOR_TABLE",
     "SCHEMA_VERSION",
     "CycleRecord",
+    "LateEvent",
     "SchemaTooNewError",
     "Store",
 ]
 
 DB_NAME = "timeseries.sqlite"
-SCHEMA_VERSION = 3
+SCHEMA_VERSION = 4
 #: Schema changes, in order: ``MIGRATIONS[v]`` is the SQL script that takes a database of
 #: version ``v - 1`` to ``v`` (``ALTER TABLE … ADD COLUMN``; new tables come from
 #: :data:`SCHEMA`, whose ``CREATE … IF NOT EXISTS`` always describes the newest version).
@@ -74,6 +78,15 @@ MIGRATIONS: dict[int, str] = {
     # 3: the model's view of every cycle (table ``model``, from SCHEMA) and the panel
     # configuration of each run, for ``dsfd report`` and ``dsfd export`` (issue 21).
     3: "ALTER TABLE runs ADD COLUMN config_json TEXT",
+    # Operator commands and manual holds (issue 20): who held the panel until when, and the
+    # cycle's place on the monotonic grid (a wall-clock step cannot reorder cycles). The
+    # commands table is new, so it comes from SCHEMA.
+    4: """
+        ALTER TABLE decisions ADD COLUMN hold_source TEXT;
+        ALTER TABLE decisions ADD COLUMN hold_expires_s REAL;
+        ALTER TABLE decisions ADD COLUMN hold_command_id INTEGER;
+        ALTER TABLE decisions ADD COLUMN run_elapsed_s REAL
+    """,
 }
 
 _STATES = ("x1", "x2", "x3", "x4", "x5")
@@ -146,6 +159,10 @@ CREATE TABLE IF NOT EXISTS decisions (
     timings_ms TEXT NOT NULL DEFAULT '{{}}',
     cycle_ms REAL NOT NULL,
     skipped_slots INTEGER NOT NULL DEFAULT 0,
+    hold_source TEXT,
+    hold_expires_s REAL,
+    hold_command_id INTEGER,
+    run_elapsed_s REAL,
     PRIMARY KEY (run_id, cycle)
 );
 CREATE INDEX IF NOT EXISTS decisions_by_time ON decisions (time_s);
@@ -176,6 +193,21 @@ CREATE TABLE IF NOT EXISTS model (
     {_MODEL_DDL},
     PRIMARY KEY (run_id, cycle)
 );
+CREATE TABLE IF NOT EXISTS commands (
+    command_id INTEGER PRIMARY KEY AUTOINCREMENT,
+    requested_s REAL NOT NULL,
+    requested_utc TEXT NOT NULL,
+    source TEXT NOT NULL,
+    requester TEXT NOT NULL,
+    kind TEXT NOT NULL,
+    args TEXT NOT NULL DEFAULT '{{}}',
+    status TEXT NOT NULL DEFAULT 'pending',
+    reason TEXT NOT NULL DEFAULT '',
+    run_id INTEGER,
+    cycle INTEGER,
+    handled_utc TEXT
+);
+CREATE INDEX IF NOT EXISTS commands_pending ON commands (status, command_id);
 """ + MQTT_CURSOR_TABLE
 
 
@@ -204,7 +236,9 @@ class CycleRecord:
     ``decisions`` table; ``parameters``: (source, estimate by name, cost, detail) when the
     parameters changed this cycle (names beyond θ, e.g. the calibrator's heat-flux offsets,
     go into the JSON column ``other``); ``events``: (level, kind, message); ``model``: column
-    → value of the ``model`` table (:data:`MODEL_COLUMNS`; absent ones are NULL).
+    → value of the ``model`` table (:data:`MODEL_COLUMNS`; absent ones are NULL);
+    ``command_results``: (command_id, status, reason) of the operator commands this cycle
+    handled (``applied`` or ``rejected``).
     """
 
     cycle: int
@@ -214,23 +248,35 @@ class CycleRecord:
     parameters: tuple[str, Mapping[str, float], float | None, str] | None = None
     events: Sequence[tuple[str, str, str]] = field(default_factory=tuple)
     model: Mapping[str, float | int | None] | None = None
+    command_results: Sequence[tuple[int, str, str]] = field(default_factory=tuple)
+
+
+#: An event recorded outside its own cycle: (cycle, time_s, level, kind, message).
+LateEvent = tuple[int, float, str, str, str]
 
 
 class Store:
     """The time-series database of one panel (one writer: the daemon)."""
 
-    def __init__(self, path: Path, conn: sqlite3.Connection, *, moved_aside: Path | None
-                 ) -> None:
+    def __init__(self, path: Path, conn: sqlite3.Connection, *, moved_aside: Path | None,
+                 buffer_cycles: int = 720) -> None:
         self.path = path
         self.conn = conn
         #: Where a corrupt database was moved at open, if it was.
         self.moved_aside = moved_aside
         self.run_id: int | None = None
+        #: The daemon's path into the database: cycles wait here while writes fail.
+        self.buffer = WriteBuffer(self.append, capacity=buffer_cycles)
+        self._reader: sqlite3.Connection | None = None
 
     # ------------------------------------------------------------------ opening
     @classmethod
-    def open(cls, state_dir: Path) -> Store:
-        """Open (or create) ``state_dir/timeseries.sqlite``; move a corrupt one aside."""
+    def open(cls, state_dir: Path, *, buffer_cycles: int = 720) -> Store:
+        """Open (or create) ``state_dir/timeseries.sqlite``; move a corrupt one aside.
+
+        ``buffer_cycles``: cycles kept in memory while the database cannot be written
+        (:class:`~dsfd.storage.buffer.WriteBuffer`).
+        """
         state_dir.mkdir(parents=True, exist_ok=True)
         path = state_dir / DB_NAME
         moved: Path | None = None
@@ -240,7 +286,7 @@ class Store:
             moved = _move_aside(path)
             conn = _connect_checked(path)
             _insert_meta(conn, "recovered_from", f"{moved.name}: {exc}")
-        return cls(path, conn, moved_aside=moved)
+        return cls(path, conn, moved_aside=moved, buffer_cycles=buffer_cycles)
 
     def begin_run(self, *, panel: str, mode: str, version: str, config_path: str | None,
                   config: Mapping[str, Any] | None = None) -> int:
@@ -259,16 +305,20 @@ class Store:
         return self.run_id
 
     def end_run(self, *, reason: str, cycles: int) -> None:
-        """Mark the run as cleanly ended (the next start then skips the integrity check)."""
-        if self.run_id is None:
+        """Mark the run as cleanly ended (the next start then skips the integrity check).
+
+        Cycles still waiting in the buffer are written first; a run whose rows could not all
+        be written is left unmarked, so the next start checks the database."""
+        if self.run_id is None or not self.buffer.flush(wait_s=10.0) or self.buffer.waiting:
             return
         with self.conn:
             self.conn.execute("UPDATE runs SET ended_utc = ?, end_reason = ?, cycles = ? "
                               "WHERE run_id = ?", (iso_now(), reason, cycles, self.run_id))
 
     # ------------------------------------------------------------------ writing
-    def append(self, rec: CycleRecord) -> None:
-        """Write one cycle atomically (all rows or none)."""
+    def append(self, rec: CycleRecord, late_events: Sequence[LateEvent] = ()) -> None:
+        """Write one cycle atomically (all rows or none), with ``late_events`` recorded
+        earlier outside a cycle while the database could not be written."""
         run = self.run_id
         if run is None:
             raise RuntimeError("begin_run() first")
@@ -301,13 +351,24 @@ class Store:
                     f"VALUES ({', '.join('?' for _ in cols)})",
                     (run, rec.cycle, rec.time_s, *(_sql(rec.model[c]) for c in cols[3:])))
             self._events(run, rec.cycle, rec.time_s, rec.events)
+            for cycle, time_s, level, kind, message in late_events:
+                self._events(run, cycle, time_s, [(level, kind, message)])
+            self.conn.executemany(
+                "UPDATE commands SET status = ?, reason = ?, run_id = ?, cycle = ?, "
+                "handled_utc = ? WHERE command_id = ? AND status = 'pending'",
+                [(status, reason, run, rec.cycle, iso_now(), command_id)
+                 for command_id, status, reason in rec.command_results])
 
     def event(self, *, cycle: int, time_s: float, level: str, kind: str, message: str) -> None:
-        """Record one event outside a cycle (start-up, reload, stop)."""
+        """Record one event outside a cycle (start-up, reload, stop); if the database cannot
+        be written now, it goes in with the next cycle that can be."""
         if self.run_id is None:
             return
-        with self.conn:
-            self._events(self.run_id, cycle, time_s, [(level, kind, message)])
+        try:
+            with self.conn:
+                self._events(self.run_id, cycle, time_s, [(level, kind, message)])
+        except sqlite3.Error:
+            self.buffer.add_late_event((cycle, time_s, level, kind, message))
 
     def _events(self, run: int, cycle: int, time_s: float,
                 events: Iterable[tuple[str, str, str]]) -> None:
@@ -316,9 +377,19 @@ class Store:
             "VALUES (?, ?, ?, ?, ?, ?)",
             [(run, cycle, time_s, level, kind, msg) for level, kind, msg in events])
 
+    # ------------------------------------------------------------------ reading
+    def reader(self) -> sqlite3.Connection:
+        """A second connection for reads in the loop thread (WAL: never waits for the
+        writer, which may be busy in the store's worker thread)."""
+        if self._reader is None:
+            self._reader = sqlite3.connect(self.path, timeout=1.0, check_same_thread=False)
+        return self._reader
+
     def close(self) -> None:
-        with contextlib.suppress(sqlite3.Error):
-            self.conn.close()
+        for conn in (self._reader, self.conn):
+            if conn is not None:
+                with contextlib.suppress(sqlite3.Error):
+                    conn.close()
 
 
 def _sql(value: Any) -> Any:
@@ -334,6 +405,11 @@ def _sql(value: Any) -> Any:
 def _connect_checked(path: Path) -> sqlite3.Connection:
     """Connect, configure, create the schema; raise DatabaseError if the file is unusable."""
     existed = path.exists() and path.stat().st_size > 0
+    if not path.exists():
+        # Created here, the file gets 0666 less the umask (SQLite alone would cap it at
+        # 0644), and its -wal/-shm files take its mode: a group-shared state directory
+        # (UMask=0007) gives operators the write access commands need.
+        os.close(os.open(path, os.O_CREAT | os.O_WRONLY | os.O_CLOEXEC, 0o666))
     conn = sqlite3.connect(path, timeout=BUSY_TIMEOUT_MS / 1000, check_same_thread=False,
                            isolation_level="DEFERRED")
     try:

@@ -16,6 +16,7 @@ import socket
 import sqlite3
 import sys
 from collections.abc import Mapping
+from datetime import datetime
 from pathlib import Path
 from typing import Any
 
@@ -57,14 +58,16 @@ def suwon_mapping() -> dict[str, Any]:
 
 def write_panel(path: Path, *, tcp_port: int | None = None, rtu_port: str | None = None,
                 station_port: str | None = None, devices: bool = True,
-                extra: Mapping[str, Any] | None = None) -> Path:
-    """A copy of the Suwon panel with the devices moved to the test's emulators."""
+                extra: Mapping[str, Any] | None = None,
+                io_extra: Mapping[str, Any] | None = None) -> Path:
+    """A copy of the Suwon panel with the devices moved to the test's emulators
+    (``io_extra``: more keys of the I/O module's entry, e.g. its ``override_input``)."""
     doc = _merge(suwon_mapping(), FAST)
     if not devices:
         doc["devices"] = None
     else:
         io, station = doc["devices"]["entries"]
-        io.update(FAST_DEVICE)
+        io.update(FAST_DEVICE, **(io_extra or {}))
         if rtu_port is not None:
             io.pop("tcp")
             io.update(kind="modbus_rtu", serial={"port": rtu_port, "baudrate": 115200})
@@ -79,6 +82,27 @@ def write_panel(path: Path, *, tcp_port: int | None = None, rtu_port: str | None
     return path
 
 
+class UntouchedDevice:
+    """A listening TCP socket standing in for a Modbus device that nothing may contact."""
+
+    def __init__(self) -> None:
+        self._sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        self._sock.bind(("127.0.0.1", 0))
+        self._sock.listen()
+        self._sock.setblocking(False)
+        self.port = int(self._sock.getsockname()[1])
+
+    def contacted(self) -> bool:
+        """True if a connection arrived (the socket is closed afterwards)."""
+        try:
+            self._sock.accept()
+            return True
+        except BlockingIOError:
+            return False
+        finally:
+            self._sock.close()
+
+
 def free_port() -> int:
     with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
         s.bind(("127.0.0.1", 0))
@@ -89,11 +113,29 @@ def dsfd_command(*args: str) -> list[str]:
     return [sys.executable, "-m", "dsfd", *args]
 
 
+async def run_dsfd(*args: str, env: Mapping[str, str] | None = None,
+                   limit_s: float = RUN_LIMIT_S) -> tuple[int, str, str]:
+    """Run one ``dsfd`` command to its end: (exit status, stdout, stderr)."""
+    proc = await asyncio.create_subprocess_exec(
+        *dsfd_command(*args), cwd=ROOT, env={**os.environ, **(env or {})},
+        stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.PIPE)
+    try:
+        async with asyncio.timeout(limit_s):
+            out, err = await proc.communicate()
+    except TimeoutError:
+        proc.kill()
+        await proc.wait()
+        raise
+    return int(proc.returncode or 0), out.decode(), err.decode()
+
+
 class DaemonProcess:
     """``dsfd run`` as a subprocess; collects its JSON log lines as they arrive."""
 
-    def __init__(self, args: list[str], *, env: Mapping[str, str] | None = None) -> None:
+    def __init__(self, args: list[str], *, env: Mapping[str, str] | None = None,
+                 preexec_fn: Any = None) -> None:
         self.args = args
+        self.preexec_fn = preexec_fn
         self.env = {**os.environ, **(env or {}), "PYTHONUNBUFFERED": "1"}
         self.proc: asyncio.subprocess.Process | None = None
         self.records: list[dict[str, Any]] = []
@@ -105,7 +147,8 @@ class DaemonProcess:
     async def start(self) -> DaemonProcess:
         self.proc = await asyncio.create_subprocess_exec(
             *dsfd_command(*self.args), cwd=ROOT, env=self.env,
-            stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.PIPE)
+            stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.PIPE,
+            preexec_fn=self.preexec_fn)
         self._reader = asyncio.create_task(self._read())
         return self
 
@@ -121,8 +164,15 @@ class DaemonProcess:
 
     @property
     def cycles_logged(self) -> list[int]:
-        """Cycles whose end-of-cycle line was printed (each is committed to the DB first)."""
+        """Cycles whose end-of-cycle line was printed (each is committed to the DB first,
+        unless the line says ``stored: waiting``)."""
         return [r["cycle"] for r in self.records if r.get("event") == "cycle"]
+
+    def cycle_ended_s(self, cycle: int) -> float:
+        """Host time [s, UTC] at which ``cycle``'s line was logged."""
+        (stamp,) = [r["timestamp"] for r in self.records
+                    if r.get("event") == "cycle" and r["cycle"] == cycle]
+        return datetime.fromisoformat(stamp.replace("Z", "+00:00")).timestamp()
 
     def events(self, name: str) -> list[dict[str, Any]]:
         return [r for r in self.records if r.get("event", "").startswith(name)]

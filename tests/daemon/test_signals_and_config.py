@@ -10,37 +10,31 @@ from __future__ import annotations
 
 import asyncio
 import signal
-import socket
 import subprocess
 from pathlib import Path
 
 import yaml
 
-from tests.daemon.harness import ROOT, DaemonProcess, dsfd_command, query, write_panel
+from tests.daemon.harness import (
+    ROOT,
+    DaemonProcess,
+    UntouchedDevice,
+    dsfd_command,
+    query,
+    write_panel,
+)
 
 
 def test_bad_config_exits_before_touching_any_device(tmp_path: Path) -> None:
-    # A listening socket stands in for the Modbus device: no connection may arrive.
-    listener = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
-    listener.bind(("127.0.0.1", 0))
-    listener.listen()
-    listener.setblocking(False)
-    port = listener.getsockname()[1]
-    panel = write_panel(tmp_path / "bad.yaml", tcp_port=port, extra={
+    device = UntouchedDevice()  # stands in for the Modbus device: nothing may connect
+    panel = write_panel(tmp_path / "bad.yaml", tcp_port=device.port, extra={
         "safety": {"wind_limit_ms": -3.0}, "daemon": {"cycle_period_s": 60.0,
                                                       "store_budget_sec": 5}})
     state = tmp_path / "state"
-    try:
-        done = subprocess.run(dsfd_command("run", "--config", str(panel), "--state-dir",
-                                           str(state)), cwd=ROOT, capture_output=True,
-                              text=True, timeout=60, check=False)
-        try:
-            listener.accept()
-            connected = True
-        except BlockingIOError:
-            connected = False
-    finally:
-        listener.close()
+    done = subprocess.run(dsfd_command("run", "--config", str(panel), "--state-dir",
+                                       str(state)), cwd=ROOT, capture_output=True,
+                          text=True, timeout=60, check=False)
+    connected = device.contacted()
     assert done.returncode == 2
     assert "safety.wind_limit_ms: -3.0" in done.stderr
     assert "daemon.store_budget_sec" in done.stderr and "did you mean" in done.stderr

@@ -114,6 +114,13 @@ class MemoryDriver:
     async def read_back(self) -> Command | None:
         return command_from_values(self.commanded)
 
+    @property
+    def override_input(self) -> str | None:
+        return None
+
+    async def read_override_input(self) -> bool | None:
+        return None
+
     async def close(self) -> None:
         self.closed = True
 

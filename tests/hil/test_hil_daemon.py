@@ -10,7 +10,7 @@ calibration updated, and the database holds exactly one decision per cycle.
 from __future__ import annotations
 
 import asyncio
-from collections.abc import Awaitable, Iterator
+from collections.abc import Awaitable
 from pathlib import Path
 
 import pytest
@@ -34,12 +34,6 @@ SPEED = 400.0
 #: spacing between numbers", negative densities in plant_flow.pair_flow). What is under
 #: test here is the daemon's I/O and loop, which the plant's fidelity does not change.
 HIL_PLANT = plant_options("lumped")
-
-
-@pytest.fixture
-def station() -> Iterator[StationEmulator]:
-    with StationEmulator() as emu:
-        yield emu
 
 
 async def run_hil(tmp_path: Path, panel: Path, emulator: EmulatedModbusDevice,

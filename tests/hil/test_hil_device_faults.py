@@ -9,7 +9,6 @@ each return of the module its readings are GOOD again within two cycles.
 from __future__ import annotations
 
 import asyncio
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -28,12 +27,6 @@ SPEED = 400.0
 CYCLES = 32
 #: Cycles the daemon may carry a missing state by prediction (harness FAST settings).
 PREDICTED = 1
-
-
-@pytest.fixture
-def station() -> Iterator[StationEmulator]:
-    with StationEmulator() as emu:
-        yield emu
 
 
 def test_device_down_at_start_and_gone_mid_run_recovers_within_two_cycles(

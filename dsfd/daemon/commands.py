@@ -1,0 +1,202 @@
+"""Operator commands: one validation for every source (``dsfd override``/``resume`` now, MQTT
+later). Pure: a panel configuration and a request mapping in, a validated
+:class:`OperatorCommand` or a :class:`CommandError` naming the field and the bad value out.
+
+A request is a mapping of fields (JSON-ready, as stored in the ``commands`` table):
+
+=============  ==============================================================================
+``command``    ``override`` or ``resume``
+``hold``       override only: how long, e.g. ``"2h"``, ``"90min"``, ``"1h30m"``, ``"45m"``,
+               or a number of minutes; absent: ``safety.manual_hold_min`` (cut at the daily
+               ``safety.manual_reset_local``)
+``louver_deg`` override only: louver angle on the motor's grid inside the safety limits
+``regime``     override only: airflow regime 1..10 the panel's dampers allow
+``or_pct``     override only: damper opening on ``safety.or_step_pct`` steps, 0 in regime 10
+=============  ==============================================================================
+
+Positions left out stay where the actuators are when the daemon applies the command; an
+override without positions holds the panel where it is.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from dsfd.config.panel import REGIME_OPENINGS, PanelConfig
+
+__all__ = [
+    "COMMAND_KINDS",
+    "MAX_HOLD_S",
+    "MIN_HOLD_S",
+    "CommandError",
+    "OperatorCommand",
+    "parse_duration",
+    "validate_command",
+]
+
+COMMAND_KINDS = ("override", "resume")
+_FIELDS = {"override": ("hold", "louver_deg", "regime", "or_pct"), "resume": ()}
+#: Shortest and longest hold an operator may ask for [s].
+MIN_HOLD_S = 60.0
+MAX_HOLD_S = 7 * 86400.0
+_CLOSED = 10
+_DURATION = re.compile(r"(\d+(?:\.\d+)?)\s*(d|h|min|m|s)", re.IGNORECASE)
+_SECONDS = {"d": 86400.0, "h": 3600.0, "min": 60.0, "m": 60.0, "s": 1.0}
+
+
+class CommandError(ValueError):
+    """A request that cannot be applied; names the field and the bad value."""
+
+    def __init__(self, field: str, value: Any, message: str) -> None:
+        self.field = field
+        self.value = value
+        self.message = message
+        super().__init__(f"{field}: {value!r}: {message}")
+
+
+@dataclass(frozen=True)
+class OperatorCommand:
+    """A validated request. ``hold_s`` None: the panel's default hold (with its daily reset);
+    a position None: keep that actuator where it is."""
+
+    kind: str
+    hold_s: float | None = None
+    phi_deg: float | None = None
+    afr: int | None = None
+    or_pct: float | None = None
+
+    def positions(self) -> dict[str, float]:
+        """The positions given, by actuator name."""
+        return {k: v for k, v in (("phi_deg", self.phi_deg), ("afr", self.afr),
+                                  ("or_pct", self.or_pct)) if v is not None}
+
+    def describe(self) -> str:
+        if self.kind == "resume":
+            return "resume"
+        parts = [f"{k} {v:g}" for k, v in self.positions().items()] or ["positions kept"]
+        hold = "default hold" if self.hold_s is None else f"hold {_minutes(self.hold_s)}"
+        return f"override ({hold}; {', '.join(parts)})"
+
+
+def parse_duration(value: Any) -> float:
+    """Seconds of a duration: ``"2h"``, ``"90min"``, ``"1h30m"``, ``"45s"``, ``"1d"``, or a
+    number (or digits) of minutes. ``ValueError`` for anything else."""
+    if isinstance(value, bool):
+        raise ValueError("expected a duration such as 2h, 90min or 45m")
+    if isinstance(value, int | float) or (
+            isinstance(value, str) and value.strip().replace(".", "", 1).isdigit()):
+        seconds = float(value) * 60.0
+    elif isinstance(value, str) and value.strip():
+        text = value.strip()
+        parts = list(_DURATION.finditer(text))
+        if not parts or "".join(p.group(0) for p in parts).replace(" ", "") != \
+                text.replace(" ", ""):
+            raise ValueError("expected a duration such as 2h, 90min, 1h30m or 45m")
+        seconds = sum(float(p.group(1)) * _SECONDS[p.group(2).lower()] for p in parts)
+    else:
+        raise ValueError("expected a duration such as 2h, 90min or 45m")
+    if not math.isfinite(seconds):
+        raise ValueError("expected a finite duration")
+    return seconds
+
+
+def validate_command(cfg: PanelConfig, request: Mapping[str, Any]) -> OperatorCommand:
+    """The command ``request`` asks for on panel ``cfg``; :class:`CommandError` if it is
+    malformed or does not fit the panel (grid, limits, regimes the dampers allow)."""
+    if not isinstance(request, Mapping):
+        raise CommandError("request", request, "expected a mapping of fields")
+    kind = request.get("command")
+    if kind not in COMMAND_KINDS:
+        raise CommandError("command", kind, f"expected one of {', '.join(COMMAND_KINDS)}")
+    allowed = _FIELDS[kind]
+    for key in request:
+        if key != "command" and key not in allowed:
+            hint = f"expected one of {', '.join(allowed)}" if allowed else \
+                "resume takes no other fields"
+            raise CommandError(str(key), request[key], f"unknown field for {kind}; {hint}")
+    if kind == "resume":
+        return OperatorCommand("resume")
+    hold_s = _hold(request["hold"]) if request.get("hold") is not None else None
+    phi = _louver(cfg, request["louver_deg"]) if request.get("louver_deg") is not None \
+        else None
+    afr = _regime(cfg, request["regime"]) if request.get("regime") is not None else None
+    or_pct = _opening(cfg, request["or_pct"], afr) if request.get("or_pct") is not None \
+        else None
+    if afr == _CLOSED and or_pct is None:
+        or_pct = 0.0
+    return OperatorCommand("override", hold_s=hold_s, phi_deg=phi, afr=afr, or_pct=or_pct)
+
+
+def _hold(value: Any) -> float:
+    try:
+        seconds = parse_duration(value)
+    except ValueError as exc:
+        raise CommandError("hold", value, str(exc)) from None
+    if not MIN_HOLD_S <= seconds <= MAX_HOLD_S:
+        raise CommandError("hold", value, f"must be between {_minutes(MIN_HOLD_S)} and "
+                           f"{_minutes(MAX_HOLD_S)}")
+    return seconds
+
+
+def _number(field: str, value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float) or \
+            not math.isfinite(value):
+        raise CommandError(field, value, "expected a finite number")
+    return float(value)
+
+
+def _louver(cfg: PanelConfig, value: Any) -> float:
+    phi = _number("louver_deg", value)
+    lv, s = cfg.louver, cfg.safety
+    if lv is None:
+        raise CommandError("louver_deg", value, "this panel has no louver")
+    if not s.phi_min_deg <= phi <= s.phi_max_deg:
+        raise CommandError("louver_deg", value, f"outside the louver limits "
+                           f"{s.phi_min_deg:g}..{s.phi_max_deg:g} deg (safety.phi_*_deg)")
+    grid = lv.angles_deg()
+    if not any(abs(phi - a) < 1e-6 for a in grid):
+        lower = max((a for a in grid if a < phi), default=None)
+        upper = min((a for a in grid if a > phi), default=None)
+        near = " or ".join(f"{a:g}" for a in (lower, upper) if a is not None)
+        raise CommandError("louver_deg", value, f"not on the louver motor's {lv.step_deg:g} deg "
+                           f"grid (nearest: {near})")
+    return phi
+
+
+def _regime(cfg: PanelConfig, value: Any) -> int:
+    number = _number("regime", value)
+    if number != int(number) or not 1 <= number <= 10:
+        raise CommandError("regime", value, "expected an airflow regime 1..10")
+    afr = int(number)
+    available = cfg.openings.available_regimes()
+    if afr not in available:
+        lacking = ", ".join(sorted(REGIME_OPENINGS[afr] - set(cfg.openings.present())))
+        raise CommandError("regime", value, f"needs dampers this panel lacks ({lacking}); "
+                           f"available: {', '.join(str(r) for r in available)}")
+    return afr
+
+
+def _opening(cfg: PanelConfig, value: Any, afr: int | None) -> float:
+    or_pct = _number("or_pct", value)
+    s = cfg.safety
+    if not 0.0 <= or_pct <= s.or_max_pct:
+        raise CommandError("or_pct", value, f"outside 0..{s.or_max_pct:g} % "
+                           "(safety.or_max_pct)")
+    steps = or_pct / s.or_step_pct
+    if abs(steps - round(steps)) > 1e-6:
+        raise CommandError("or_pct", value, f"not on the damper's {s.or_step_pct:g} % steps "
+                           "(safety.or_step_pct)")
+    if afr == _CLOSED and or_pct != 0.0:
+        raise CommandError("or_pct", value, "regime 10 closes every damper: use 0 or leave "
+                           "it out")
+    return or_pct
+
+
+def _minutes(seconds: float) -> str:
+    if seconds % 3600 == 0:
+        return f"{seconds / 3600:g} h"
+    return f"{seconds / 60:g} min"
