@@ -1,10 +1,12 @@
-"""``dsfd override`` and ``dsfd resume``: operator commands to the running daemon of a panel.
+"""``dsfd override``, ``dsfd resume`` and ``dsfd mode``: operator commands to the running
+daemon of a panel.
 
 Examples::
 
     sudo dsfd override --config /etc/dsfd/suwon-south.yaml --hold 2h --louver-deg 36
     sudo dsfd override --config /etc/dsfd/suwon-south.yaml            # hold where it is
     sudo dsfd resume --config /etc/dsfd/suwon-south.yaml
+    sudo dsfd mode --config /etc/dsfd/suwon-south.yaml cooling        # the control objective
 
 The request is validated against the panel (louver grid and limits, the regimes the dampers
 allow, damper steps) before anything is queued; a bad one exits 2 naming the option and the
@@ -32,7 +34,7 @@ from dsfd.cli.state_dir import SYSTEMD_STATE_ROOT, state_dir_of
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_NOT_RUNNING, EXIT_NO_ACCESS = 0, 1, 2, 3, 4
 #: Option names of the request fields (for error messages).
 OPTION_OF = {"hold": "--hold", "louver_deg": "--louver-deg", "regime": "--regime",
-             "or_pct": "--or-pct"}
+             "or_pct": "--or-pct", "mode": "OBJECTIVE"}
 
 
 class OperatorError(Exception):
@@ -145,6 +147,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_target(r)
     _wait_options(r)
     r.set_defaults(handler=resume)
+    m = sub.add_parser("mode", help="set the control objective: heating, cooling or auto",
+                       description="Tell the running daemon which objective to control for "
+                       "(heating: Eq. 4, cooling: Eq. 5, auto: by the outdoor air), in place of "
+                       "the panel file's control.mode, until the next mode command or a "
+                       "change of control.mode in the file. It moves nothing by itself and is "
+                       "no hold. Takes effect at the next cycle.")
+    add_target(m)
+    m.add_argument("objective", metavar="OBJECTIVE", help="heating, cooling or auto")
+    _wait_options(m)
+    m.set_defaults(handler=mode)
 
 
 def _wait_options(p: argparse.ArgumentParser) -> None:
@@ -166,6 +178,10 @@ def override(args: argparse.Namespace) -> int:
 
 def resume(args: argparse.Namespace) -> int:
     return _send("resume", {"command": "resume"}, args)
+
+
+def mode(args: argparse.Namespace) -> int:
+    return _send("mode", {"command": "mode", "mode": args.objective}, args)
 
 
 def _send(name: str, request: dict[str, Any], args: argparse.Namespace) -> int:

@@ -93,10 +93,12 @@ def _gather(conn: sqlite3.Connection, state: Path, cfg: Any | None, now: float,
         "run": run,
         "last_cycle": None if last is None else _cycle(last, now),
         "hold": None if last is None else _hold(conn, last, now),
+        "objective": None if last is None else _objective(conn, last),
         "flagged": [] if last is None else _flagged(conn, last),
         "calibration": _calibration(conn, cfg, (run or {}).get("panel"), now),
         "commands": _commands(conn) if "commands" in _tables(conn) else None,
-        "mqtt": _mqtt(conn) if "mqtt_cursor" in _tables(conn) else [],
+        "mqtt": _mqtt(conn, running=pid is not None) if "mqtt_cursor" in _tables(conn)
+        else [],
     }
     if last is not None and "hold_source" not in columns(conn, "decisions"):
         info["note"] = "database of an older dsfd (schema 1): no hold information"
@@ -160,6 +162,23 @@ def _hold(conn: sqlite3.Connection, d: dict[str, Any], now: float) -> dict[str, 
     return out
 
 
+def _objective(conn: sqlite3.Connection, d: dict[str, Any]) -> dict[str, Any] | None:
+    """The control objective of the last cycle and who chose it (None before schema 5)."""
+    if d.get("objective_mode") is None:
+        return None
+    heating = d.get("heating")
+    out: dict[str, Any] = {
+        "mode": d["objective_mode"], "command_id": d.get("mode_command_id"),
+        "now": None if heating is None else ("heating" if heating else "cooling"),
+        "set_by": "panel file (control.mode)"}
+    if out["command_id"] is not None:
+        cmd = _row(conn, "SELECT source, requester FROM commands WHERE command_id = ?",
+                   out["command_id"])
+        who = f" by {cmd['source']} {cmd['requester']}" if cmd else ""
+        out["set_by"] = f"operator command #{out['command_id']}{who}"
+    return out
+
+
 def _flagged(conn: sqlite3.Connection, d: dict[str, Any]) -> list[dict[str, str]]:
     return [{"signal": s, "quality": q, "detail": t} for s, q, t in conn.execute(
         "SELECT signal, quality, detail FROM samples WHERE run_id = ? AND cycle = ? AND "
@@ -194,12 +213,27 @@ def _commands(conn: sqlite3.Connection) -> dict[str, Any]:
     return {"pending": pending, "last": last}
 
 
-def _mqtt(conn: sqlite3.Connection) -> list[dict[str, Any]]:
-    """The MQTT publisher's delivery state per destination (``mqtt_cursor``)."""
-    cur = conn.execute("SELECT destination, connected, backlog, delivered, last_error, "
-                       "last_error_utc, updated_utc FROM mqtt_cursor ORDER BY destination")
+def _mqtt(conn: sqlite3.Connection, *, running: bool) -> list[dict[str, Any]]:
+    """The MQTT publisher's delivery state per destination (``mqtt_cursor``): connected (as
+    last saved by a running daemon: a killed one cannot clear it), the last error, the
+    backlog, the state messages delivered and the last one acknowledged (run, cycle, time)."""
+    from dsfd.measured import iso_utc
+
+    cur = conn.execute("SELECT destination, connected, backlog, delivered, expired, "
+                       "last_error, last_error_utc, run_id, cycle, time_s, updated_utc "
+                       "FROM mqtt_cursor ORDER BY destination")
     names = [d[0] for d in cur.description]
-    return [{**dict(zip(names, row, strict=True)), "connected": bool(row[1])} for row in cur]
+    out = []
+    for row in cur:
+        m = dict(zip(names, row, strict=True))
+        m["connected"] = bool(m["connected"]) and running
+        t = m.pop("time_s")
+        m["last_delivered"] = None if not m["cycle"] else {
+            "run_id": m["run_id"], "cycle": m["cycle"],
+            "time_utc": None if t is None else iso_utc(round(t))}
+        del m["run_id"], m["cycle"]
+        out.append(m)
+    return out
 
 
 # --------------------------------------------------------------------------- text
@@ -227,6 +261,9 @@ def render(info: dict[str, Any]) -> list[str]:
         if c["fallback"]:
             out.append(f"  fallback:    {c['fallback']}")
     out.append(f"  hold:        {_hold_line(info['hold'])}")
+    if obj := info.get("objective"):
+        now = f" ({obj['now']} now)" if obj["mode"] == "auto" and obj["now"] else ""
+        out.append(f"  objective:   {obj['mode']}{now}; set by {obj['set_by']}")
     flagged = ", ".join(f"{f['signal']} ({f['quality']})" for f in info["flagged"])
     out.append(f"  flagged:     {flagged or 'none'}")
     out.append(f"  calibration: {_calibration_line(info['calibration'])}")
@@ -240,15 +277,24 @@ def render(info: dict[str, Any]) -> list[str]:
                      + (f" ({last['reason']})" if last["reason"] else ""))
         out.append(f"  commands:    {line}")
     for m in info.get("mqtt") or []:
-        state = "connected" if m["connected"] else "not connected"
-        line = (f"{m['destination']}: {state}, {m['backlog']} waiting, {m['delivered']} "
-                f"delivered (as of {m['updated_utc']})")
-        if m["last_error"]:
-            line += f"; last error {m['last_error_utc']}: {m['last_error']}"
-        out.append(f"  mqtt:        {line}")
+        out += _mqtt_lines(m, running=d["running"])
     if info.get("note"):
         out.append(f"  note:        {info['note']}")
     return out
+
+
+def _mqtt_lines(m: dict[str, Any], *, running: bool) -> list[str]:
+    state = "connected" if m["connected"] else (
+        "not connected" if running else "not connected (no daemon)")
+    last = m.get("last_delivered")
+    upto = "none delivered yet" if not last else (
+        f"delivered up to cycle {last['cycle']} of run {last['run_id']}"
+        + (f" ({last['time_utc']})" if last["time_utc"] else ""))
+    lines = [f"  mqtt:        {m['destination']}: {state}; {m['backlog']} waiting, "
+             f"{upto}, {m['delivered']} in all (as of {m['updated_utc']})"]
+    if m["last_error"]:
+        lines.append(f"               last error {m['last_error_utc']}: {m['last_error']}")
+    return lines
 
 
 def _hold_line(hold: dict[str, Any] | None) -> str:

@@ -1,21 +1,26 @@
-"""Operator commands: one validation for every source (``dsfd override``/``resume`` now, MQTT
-later). Pure: a panel configuration and a request mapping in, a validated
+"""Operator commands: one validation for every source (``dsfd override``/``resume``/``mode``
+and MQTT's ``<base>/cmd/...``). Pure: a panel configuration and a request mapping in, a validated
 :class:`OperatorCommand` or a :class:`CommandError` naming the field and the bad value out.
 
 A request is a mapping of fields (JSON-ready, as stored in the ``commands`` table):
 
 =============  ==============================================================================
-``command``    ``override`` or ``resume``
+``command``    ``override``, ``resume`` or ``mode``
 ``hold``       override only: how long, e.g. ``"2h"``, ``"90min"``, ``"1h30m"``, ``"45m"``,
                or a number of minutes; absent: ``safety.manual_hold_min`` (cut at the daily
                ``safety.manual_reset_local``)
 ``louver_deg`` override only: louver angle on the motor's grid inside the safety limits
 ``regime``     override only: airflow regime 1..10 the panel's dampers allow
 ``or_pct``     override only: damper opening on ``safety.or_step_pct`` steps, 0 in regime 10
+``mode``       mode only (required): the control objective, ``heating``, ``cooling`` or
+               ``auto`` (as ``control.mode``)
 =============  ==============================================================================
 
 Positions left out stay where the actuators are when the daemon applies the command; an
-override without positions holds the panel where it is.
+override without positions holds the panel where it is. ``mode`` sets the objective the
+optimiser and the baseline pursue (docs/model.md#control-objective) in place of the panel
+file's ``control.mode``; it moves nothing by itself and is no hold (README, "Operator
+commands").
 """
 
 from __future__ import annotations
@@ -32,14 +37,18 @@ __all__ = [
     "COMMAND_KINDS",
     "MAX_HOLD_S",
     "MIN_HOLD_S",
+    "OBJECTIVE_MODES",
     "CommandError",
     "OperatorCommand",
     "parse_duration",
     "validate_command",
 ]
 
-COMMAND_KINDS = ("override", "resume")
-_FIELDS = {"override": ("hold", "louver_deg", "regime", "or_pct"), "resume": ()}
+COMMAND_KINDS = ("override", "resume", "mode")
+_FIELDS = {"override": ("hold", "louver_deg", "regime", "or_pct"), "resume": (),
+           "mode": ("mode",)}
+#: The control objectives an operator may choose (the values of ``control.mode``).
+OBJECTIVE_MODES = ("heating", "cooling", "auto")
 #: Shortest and longest hold an operator may ask for [s].
 MIN_HOLD_S = 60.0
 MAX_HOLD_S = 7 * 86400.0
@@ -61,13 +70,15 @@ class CommandError(ValueError):
 @dataclass(frozen=True)
 class OperatorCommand:
     """A validated request. ``hold_s`` None: the panel's default hold (with its daily reset);
-    a position None: keep that actuator where it is."""
+    a position None: keep that actuator where it is; ``mode``: the objective of a ``mode``
+    command."""
 
     kind: str
     hold_s: float | None = None
     phi_deg: float | None = None
     afr: int | None = None
     or_pct: float | None = None
+    mode: str | None = None
 
     def positions(self) -> dict[str, float]:
         """The positions given, by actuator name."""
@@ -77,6 +88,8 @@ class OperatorCommand:
     def describe(self) -> str:
         if self.kind == "resume":
             return "resume"
+        if self.kind == "mode":
+            return f"mode {self.mode}"
         parts = [f"{k} {v:g}" for k, v in self.positions().items()] or ["positions kept"]
         hold = "default hold" if self.hold_s is None else f"hold {_minutes(self.hold_s)}"
         return f"override ({hold}; {', '.join(parts)})"
@@ -120,6 +133,11 @@ def validate_command(cfg: PanelConfig, request: Mapping[str, Any]) -> OperatorCo
             raise CommandError(str(key), request[key], f"unknown field for {kind}; {hint}")
     if kind == "resume":
         return OperatorCommand("resume")
+    if kind == "mode":
+        mode = request.get("mode")
+        if not isinstance(mode, str) or mode not in OBJECTIVE_MODES:
+            raise CommandError("mode", mode, f"expected one of {', '.join(OBJECTIVE_MODES)}")
+        return OperatorCommand("mode", mode=mode)
     hold_s = _hold(request["hold"]) if request.get("hold") is not None else None
     phi = _louver(cfg, request["louver_deg"]) if request.get("louver_deg") is not None \
         else None

@@ -29,6 +29,7 @@ still runs the next cycle does not start another one of its kind.
 from __future__ import annotations
 
 import asyncio
+import dataclasses
 import logging
 import math
 import time
@@ -38,6 +39,7 @@ from typing import TypeVar
 
 import numpy as np
 
+from dsfd.config.control import Control
 from dsfd.config.panel import PanelConfig
 from dsfd.control.baseline import rule_decision
 from dsfd.control.objective import is_heating
@@ -169,8 +171,9 @@ class Controller:
         t["calibrate"] = _ms(mark)
 
         mark = time.perf_counter()
+        objective, objective_by = self.manual.objective_mode
         heating = (None if weather.inputs is None
-                   else is_heating(self.cfg.control, float(weather.inputs.t_out_k[0])))
+                   else is_heating(self._control(objective), float(weather.inputs.t_out_k[0])))
         forecast = None if weather.inputs is None else self._forecast(weather.inputs, now_s)
         if hold is None:
             decision, method, fallback, no_decision = await self._decide(
@@ -212,7 +215,8 @@ class Controller:
             calibration=calibration, timings_ms=t, manual_override=bool(held.moved),
             estimate=estimate, applied=applied, horizon_x_k=horizon_x,
             horizon_s=self.cfg.control.horizon_steps * self.cfg.model.step_s,
-            plant_heat_j=plant_heat, hold=hold,
+            plant_heat_j=plant_heat, hold=hold, objective_mode=objective,
+            mode_command_id=objective_by,
             run_elapsed_s=round(slot.deadline_s - self._grid0_s, 6),
             events=[*events, *held.events, *_drain(self.calibration.events)],
             command_results=held.results)
@@ -221,6 +225,12 @@ class Controller:
         t["store"] = _ms(mark)
         t["total"] = _ms(t0)
         return outcome
+
+    def _control(self, objective: str) -> Control:
+        """The control settings with the objective in force (an operator's ``mode``)."""
+        if objective == self.cfg.control.mode:
+            return self.cfg.control
+        return dataclasses.replace(self.cfg.control, mode=objective)
 
     def _clock_events(self, now_s: float) -> list[tuple[str, str, str]]:
         """A wall-clock step since the last cycle: logged, an event, and the calibration

@@ -12,6 +12,12 @@ At start, :meth:`ManualStage.restore` takes over a detected or operator hold tha
 previous run left active (the last stored decision says so, and it has not expired), at the
 position the actuators have then: a restart of the service neither undoes a person's hold
 nor moves the panel.
+
+The stage also keeps the **control objective** an operator chose with a ``mode`` command
+(heating, cooling, auto) in place of the panel file's ``control.mode``. It is no hold: the
+controller goes on deciding, for that objective. It lasts until the next ``mode`` command or
+until the panel file's ``control.mode`` changes (at a reload, or between two runs: the
+newer word wins, as with holds), and it survives a restart (:meth:`ManualStage.restore_mode`).
 """
 
 from __future__ import annotations
@@ -23,7 +29,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from dsfd.config.panel import PanelConfig
-from dsfd.daemon.commands import CommandError, validate_command
+from dsfd.daemon.commands import OBJECTIVE_MODES, CommandError, OperatorCommand, validate_command
 from dsfd.daemon.hold import Hold, HoldTracker, HoldUpdate, PendingCommand
 from dsfd.drivers.base import Command
 from dsfd.storage import commands as command_table
@@ -44,12 +50,31 @@ class ManualStage:
         #: Results not yet known to be stored, by command id.
         self._handled: dict[int, tuple[str, str]] = {}
         self._read_failing = False
+        #: The objective an operator chose and the ``mode`` command that chose it; None: the
+        #: panel file's ``control.mode``.
+        self.operator_mode: tuple[str, int] | None = None
+        #: Events that happened between cycles (a reload), handed over with the next update.
+        self._events: list[tuple[str, str, str]] = []
 
     @property
     def hold(self) -> Hold | None:
         return self.tracker.hold
 
+    @property
+    def objective_mode(self) -> tuple[str, int | None]:
+        """The control objective in force and the operator command behind it (None: the
+        panel file's ``control.mode``)."""
+        if self.operator_mode is not None:
+            return self.operator_mode
+        return self.cfg.control.mode, None
+
     def reconfigure(self, cfg: PanelConfig) -> None:
+        if self.operator_mode is not None and cfg.control.mode != self.cfg.control.mode:
+            mode, cid = self.operator_mode
+            self._events.append(("info", "mode_ended", f"control objective {mode} (operator "
+                                 f"command #{cid}) ended: the panel file's control.mode is "
+                                 f"now {cfg.control.mode}"))
+            self.operator_mode = None
         self.cfg = cfg
         self.tracker.cfg = cfg
 
@@ -71,13 +96,52 @@ class ManualStage:
         self.tracker.restore(hold)
         return hold.describe()
 
+    def restore_mode(self, last: Mapping[str, Any] | None, *, file_mode_then: str | None
+                     ) -> str | None:
+        """Keep the objective an operator chose in the previous run (the last stored
+        decision), unless the panel file's ``control.mode`` has changed since
+        (``file_mode_then``: the previous run's, None if unknown); what was restored."""
+        if not last or last.get("mode_command_id") is None:
+            return None
+        mode = last.get("objective_mode")
+        if mode not in OBJECTIVE_MODES:
+            return None
+        if file_mode_then is not None and file_mode_then != self.cfg.control.mode:
+            return None
+        self.operator_mode = (str(mode), int(last["mode_command_id"]))
+        return f"control objective {mode} (operator command #{last['mode_command_id']})"
+
     def update(self, *, now_mono_s: float, now_s: float, read_back: Command | None,
                expected: Command | None, input_active: bool | None, input_where: str
                ) -> HoldUpdate:
-        """This cycle's hold, with the commands picked up now."""
-        return self.tracker.update(now_mono_s=now_mono_s, now_s=now_s, read_back=read_back,
-                                   expected=expected, input_active=input_active,
-                                   input_where=input_where, commands=self._claim())
+        """This cycle's hold and objective, with the commands picked up now."""
+        holds: list[PendingCommand] = []
+        modes: list[PendingCommand] = []
+        for pending in self._claim():
+            is_mode = isinstance(pending.command, OperatorCommand) and \
+                pending.command.kind == "mode"
+            (modes if is_mode else holds).append(pending)
+        up = self.tracker.update(now_mono_s=now_mono_s, now_s=now_s, read_back=read_back,
+                                 expected=expected, input_active=input_active,
+                                 input_where=input_where, commands=holds)
+        up.events[:0] = self._events
+        self._events = []
+        for pending in modes:
+            self._set_mode(up, pending)
+        return up
+
+    def _set_mode(self, up: HoldUpdate, pending: PendingCommand) -> None:
+        """A ``mode`` command: the objective from this cycle on (an input hold does not
+        refuse it: the objective moves nothing while the panel is held)."""
+        assert isinstance(pending.command, OperatorCommand)
+        mode, cid = str(pending.command.mode), pending.command_id
+        before, by = self.objective_mode
+        self.operator_mode = (mode, cid)
+        was = f"was {before}, " + ("the panel file's control.mode" if by is None else
+                                   f"operator command #{by}")
+        up.results.append((cid, "applied", f"control objective {mode} ({was})"))
+        up.events.append(("info", "mode_set", f"control objective {mode} by #{cid} "
+                          f"{pending.source} {pending.requester} ({was})"))
 
     def handled(self, results: list[tuple[int, str, str]]) -> None:
         """Remember results until their cycle is stored."""

@@ -53,6 +53,10 @@ class CycleOutcome:
     plant_heat_j: Mapping[str, float] | None = None
     #: The manual hold in force this cycle (None: the controller decided).
     hold: Hold | None = None
+    #: The control objective in force (heating, cooling, auto) and the operator ``mode``
+    #: command that set it (None: the panel file's ``control.mode``).
+    objective_mode: str | None = None
+    mode_command_id: int | None = None
     #: Seconds since the run's first cycle on the monotonic cycle grid.
     run_elapsed_s: float = 0.0
     #: Events of this cycle beyond the sensor faults: (level, kind, message).

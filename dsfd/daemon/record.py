@@ -50,6 +50,7 @@ def cycle_record(out: CycleOutcome, weather: CycleWeather, calibration: Calibrat
         "hold_source": None if out.hold is None else out.hold.source,
         "hold_expires_s": None if out.hold is None else out.hold.expires_s,
         "hold_command_id": None if out.hold is None else out.hold.command_id,
+        "objective_mode": out.objective_mode, "mode_command_id": out.mode_command_id,
     }
     params = None
     cal = out.calibration

@@ -18,10 +18,11 @@ from __future__ import annotations
 
 import asyncio
 import dataclasses
+import json
 import logging
 import signal
 import sqlite3
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Protocol
@@ -341,12 +342,18 @@ async def _serve_locked(opts: RunOptions, cfg: PanelConfig, *, state_dir: Path,
     controller = Controller(cfg, driver=driver, clock=clock, store=store,
                             calibration=calibration, write_enabled=write_enabled,
                             plant_heat_j=None if plant is None else plant.room_heat_now)
-    restored = controller.manual.restore(_last_decision(store), now_mono_s=clock.monotonic(),
+    last = _last_decision(store)
+    restored = controller.manual.restore(last, now_mono_s=clock.monotonic(),
                                          now_s=clock.wall())
     if restored:
         log.warning("manual hold of the previous run restored: %s", restored)
         store.event(cycle=0, time_s=clock.wall(), level="info", kind="hold_restored",
                     message=restored)
+    objective = controller.manual.restore_mode(last, file_mode_then=_file_mode_of(store, last))
+    if objective:
+        log.warning("operator's choice of the previous run restored: %s", objective)
+        store.event(cycle=0, time_s=clock.wall(), level="info", kind="mode_restored",
+                    message=objective)
     daemon = _Daemon(opts, cfg, clock, driver, store, controller, notifier, integrations)
     daemon.summary.start_calibration(calibration)
     loop = asyncio.get_running_loop()
@@ -420,3 +427,16 @@ def _last_decision(store: Store) -> dict[str, object] | None:
         return last_decision(store.reader())
     except sqlite3.Error:
         return None
+
+
+def _file_mode_of(store: Store, last: Mapping[str, object] | None) -> str | None:
+    """``control.mode`` of the panel file the run of ``last`` used (None: unknown)."""
+    if not last:
+        return None
+    try:
+        row = store.reader().execute("SELECT config_json FROM runs WHERE run_id = ?",
+                                     (last["run_id"],)).fetchone()
+        mode = json.loads(row[0])["control"]["mode"] if row and row[0] else None
+    except (sqlite3.Error, ValueError, KeyError, TypeError):
+        return None
+    return mode if isinstance(mode, str) else None

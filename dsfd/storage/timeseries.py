@@ -46,7 +46,7 @@ __all__ = [
 ]
 
 DB_NAME = "timeseries.sqlite"
-SCHEMA_VERSION = 4
+SCHEMA_VERSION = 5
 #: Schema changes, in order: ``MIGRATIONS[v]`` is the SQL script that takes a database of
 #: version ``v - 1`` to ``v`` (``ALTER TABLE … ADD COLUMN``; new tables come from
 #: :data:`SCHEMA`, whose ``CREATE … IF NOT EXISTS`` always describes the newest version).
@@ -86,6 +86,12 @@ MIGRATIONS: dict[int, str] = {
         ALTER TABLE decisions ADD COLUMN hold_expires_s REAL;
         ALTER TABLE decisions ADD COLUMN hold_command_id INTEGER;
         ALTER TABLE decisions ADD COLUMN run_elapsed_s REAL
+    """,
+    # The control objective in force and the operator's ``mode`` command behind it (issue
+    # 22: the MQTT ``<base>/cmd/mode`` and ``dsfd mode``).
+    5: """
+        ALTER TABLE decisions ADD COLUMN objective_mode TEXT;
+        ALTER TABLE decisions ADD COLUMN mode_command_id INTEGER
     """,
 }
 
@@ -163,6 +169,8 @@ CREATE TABLE IF NOT EXISTS decisions (
     hold_expires_s REAL,
     hold_command_id INTEGER,
     run_elapsed_s REAL,
+    objective_mode TEXT,
+    mode_command_id INTEGER,
     PRIMARY KEY (run_id, cycle)
 );
 CREATE INDEX IF NOT EXISTS decisions_by_time ON decisions (time_s);

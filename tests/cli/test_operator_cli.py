@@ -50,7 +50,11 @@ def test_status_text_says_who_holds_the_panel_and_until_when() -> None:
         "mqtt": [{"destination": "10.0.4.2:1883 dsfd/p", "connected": False, "backlog": 12,
                   "delivered": 340, "last_error": "not authorised",
                   "last_error_utc": "2025-01-02T08:20:00Z",
+                  "last_delivered": {"run_id": 3, "cycle": 140,
+                                     "time_utc": "2025-01-02T08:19:00Z"},
                   "updated_utc": "2025-01-02T08:30:58Z"}],
+        "objective": {"mode": "auto", "command_id": 5, "now": "heating",
+                      "set_by": "operator command #5 by mqtt 10.0.4.2:1883 dsfd/p/cmd/mode"},
     }
     text = "\n".join(render(info))
     assert "daemon running (PID 42)" in text
@@ -60,4 +64,8 @@ def test_status_text_says_who_holds_the_panel_and_until_when() -> None:
     assert "flagged:     x3_c (stuck)" in text
     assert "(10 min ago), online; 2 updates this run; at a bound: h_ca4" in text
     assert "commands:    1 pending" in text
-    assert "mqtt:        10.0.4.2:1883 dsfd/p: not connected, 12 waiting, 340 delivered" in text
+    assert "objective:   auto (heating now); set by operator command #5 by mqtt " \
+        "10.0.4.2:1883 dsfd/p/cmd/mode" in text
+    assert "mqtt:        10.0.4.2:1883 dsfd/p: not connected; 12 waiting, delivered up to " \
+        "cycle 140 of run 3 (2025-01-02T08:19:00Z), 340 in all" in text
+    assert "last error 2025-01-02T08:20:00Z: not authorised" in text

@@ -37,6 +37,8 @@ def test_a_valid_override_and_resume(cfg) -> None:
     # Regime 10 closes every damper: the opening follows.
     assert validate_command(cfg, {"command": "override", "regime": 10}).or_pct == 0.0
     assert validate_command(cfg, {"command": "resume"}) == OperatorCommand("resume")
+    assert validate_command(cfg, {"command": "mode", "mode": "cooling"}) == \
+        OperatorCommand("mode", mode="cooling")
 
 
 @pytest.mark.parametrize("request_, field, words", [
@@ -53,7 +55,11 @@ def test_a_valid_override_and_resume(cfg) -> None:
     ({"command": "override", "hold": "8d"}, "hold", "between"),
     ({"command": "override", "speed": 3}, "speed", "unknown field for override"),
     ({"command": "resume", "hold": "2h"}, "hold", "resume takes no other fields"),
-    ({"command": "explode"}, "command", "override, resume"),
+    ({"command": "explode"}, "command", "override, resume, mode"),
+    ({"command": "mode", "mode": "summer"}, "mode", "heating, cooling, auto"),
+    ({"command": "mode"}, "mode", "heating, cooling, auto"),
+    ({"command": "mode", "mode": ["auto"]}, "mode", "heating, cooling, auto"),
+    ({"command": "mode", "mode": "auto", "hold": "2h"}, "hold", "unknown field for mode"),
 ])
 def test_malformed_requests_name_the_field_and_the_value(cfg, request_, field, words) -> None:
     with pytest.raises(CommandError) as err:
@@ -253,4 +259,54 @@ def test_commands_are_read_from_the_table_once_and_stale_ones_expire(cfg, tmp_pa
     again = stage.update(now_mono_s=60.0, now_s=T0 + 60, read_back=here, expected=here,
                          input_active=None, input_where="")
     assert again.results == [] and again.hold is not None
+    store.close()
+
+
+def test_an_operators_objective_lasts_until_the_file_changes_and_survives_a_restart(
+        cfg, tmp_path) -> None:
+    from dsfd.daemon.manual import ManualStage
+    from dsfd.storage.commands import submit
+    from dsfd.storage.timeseries import Store
+
+    assert cfg.control.mode == "auto"
+    store = Store.open(tmp_path)
+    store.begin_run(panel=cfg.panel.id, mode="test", version="0", config_path=None)
+    held = submit(store.path, kind="override", args={"hold": "1h"}, source="cli",
+                  requester="a@b")
+    cooling = submit(store.path, kind="mode", args={"mode": "cooling"}, source="mqtt",
+                     requester="127.0.0.1:1883 dsfd/p/cmd/mode")
+    stage = ManualStage(cfg, store)
+    assert stage.objective_mode == ("auto", None)
+    here = Command(phi_deg=0.0, afr=10, or_pct=0.0)
+    up = stage.update(now_mono_s=0.0, now_s=T0, read_back=here, expected=here,
+                      input_active=None, input_where="")
+    stage.handled(up.results)
+    # Both applied: the objective is no hold and the hold no objective.
+    assert [(c, s) for c, s, _ in up.results] == [(held, "applied"), (cooling, "applied")]
+    assert "control objective cooling (was auto, the panel file's control.mode)" in \
+        up.results[1][2]
+    assert up.hold is not None and up.hold.source == "operator"
+    assert stage.objective_mode == ("cooling", cooling)
+    assert [k for _, k, _ in up.events][-1] == "mode_set"
+    # A reload that leaves control.mode alone keeps it; one that changes it ends it.
+    stage.reconfigure(dataclasses.replace(cfg, safety=cfg.safety))
+    assert stage.objective_mode == ("cooling", cooling)
+    heating_file = dataclasses.replace(cfg, control=dataclasses.replace(cfg.control,
+                                                                        mode="heating"))
+    stage.reconfigure(heating_file)
+    assert stage.objective_mode == ("heating", None)
+    up = stage.update(now_mono_s=60.0, now_s=T0 + 60, read_back=here, expected=here,
+                      input_active=None, input_where="")
+    assert [k for _, k, _ in up.events] == ["mode_ended"]
+    # A restart keeps the operator's objective unless the file's control.mode changed since.
+    last = {"objective_mode": "cooling", "mode_command_id": cooling}
+    again = ManualStage(cfg, store)
+    assert again.restore_mode(last, file_mode_then="auto") is not None
+    assert again.objective_mode == ("cooling", cooling)
+    edited = ManualStage(heating_file, store)
+    assert edited.restore_mode(last, file_mode_then="auto") is None
+    assert edited.objective_mode == ("heating", None)
+    assert ManualStage(cfg, store).restore_mode({"objective_mode": "auto",
+                                                 "mode_command_id": None},
+                                                file_mode_then="auto") is None
     store.close()

@@ -36,23 +36,27 @@ def test_a_version_1_database_is_migrated_in_place_and_keeps_its_rows(tmp_path: 
     store = Store.open(tmp_path)
     assert store.moved_aside is None
     meta = dict(store.conn.execute("SELECT key, value FROM meta"))
-    assert meta["schema_version"] == str(SCHEMA_VERSION) == "4"
-    assert {"migrated_to_2", "migrated_to_3", "migrated_to_4"} <= set(meta)
+    assert meta["schema_version"] == str(SCHEMA_VERSION) == "5"
+    assert {"migrated_to_2", "migrated_to_3", "migrated_to_4", "migrated_to_5"} <= set(meta)
     old = store.conn.execute("SELECT COUNT(*), COUNT(hold_source), COUNT(hold_expires_s), "
-                             "COUNT(hold_command_id), COUNT(run_elapsed_s) FROM decisions"
+                             "COUNT(hold_command_id), COUNT(run_elapsed_s), "
+                             "COUNT(objective_mode), COUNT(mode_command_id) FROM decisions"
                              ).fetchone()
-    assert old == (3, 0, 0, 0, 0)  # the old rows are kept, the new columns NULL
+    assert old == (3, 0, 0, 0, 0, 0, 0)  # the old rows are kept, the new columns NULL
     # The new columns and the commands table work on the migrated file.
     store.begin_run(panel="p", mode="test", version="0", config_path=None)
     cid = command_table.submit(store.path, kind="override", args={"hold": "2h"},
                                source="cli", requester="a@b")
     store.append(CycleRecord(**{**record(1, hold_source="operator", hold_expires_s=1.7e9,
-                                         hold_command_id=cid, run_elapsed_s=0.0).__dict__,
+                                         hold_command_id=cid, run_elapsed_s=0.0,
+                                         objective_mode="cooling", mode_command_id=cid
+                                         ).__dict__,
                                 "command_results": [(cid, "applied", "held")]}))
     new_run = store.run_id
-    row = store.conn.execute("SELECT hold_source, hold_command_id FROM decisions WHERE "
-                             "run_id = ?", (new_run,)).fetchone()
-    assert row == ("operator", cid)
+    row = store.conn.execute("SELECT hold_source, hold_command_id, objective_mode, "
+                             "mode_command_id FROM decisions WHERE run_id = ?", (new_run,)
+                             ).fetchone()
+    assert row == ("operator", cid, "cooling", cid)
     done = command_table.outcome(store.conn, cid)
     assert (done.status, done.reason, done.run_id, done.cycle) == ("applied", "held", new_run, 1)
     assert store.conn.execute("PRAGMA integrity_check").fetchone()[0] == "ok"
