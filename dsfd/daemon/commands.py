@@ -64,7 +64,7 @@ class CommandError(ValueError):
         self.field = field
         self.value = value
         self.message = message
-        super().__init__(f"{field}: {value!r}: {message}")
+        super().__init__(f"{field}: {_shown(value)}: {message}")
 
 
 @dataclass(frozen=True)
@@ -102,7 +102,10 @@ def parse_duration(value: Any) -> float:
         raise ValueError("expected a duration such as 2h, 90min or 45m")
     if isinstance(value, int | float) or (
             isinstance(value, str) and value.strip().replace(".", "", 1).isdigit()):
-        seconds = float(value) * 60.0
+        try:
+            seconds = float(value) * 60.0
+        except OverflowError:  # an int beyond float's range
+            raise ValueError("expected a finite duration") from None
     elif isinstance(value, str) and value.strip():
         text = value.strip()
         parts = list(_DURATION.finditer(text))
@@ -161,10 +164,15 @@ def _hold(value: Any) -> float:
 
 
 def _number(field: str, value: Any) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float) or \
-            not math.isfinite(value):
+    if isinstance(value, bool) or not isinstance(value, int | float):
         raise CommandError(field, value, "expected a finite number")
-    return float(value)
+    try:
+        number = float(value)  # an int beyond float's range raises (JSON allows any size)
+    except OverflowError:
+        number = math.inf
+    if not math.isfinite(number):
+        raise CommandError(field, value, "expected a finite number")
+    return number
 
 
 def _louver(cfg: PanelConfig, value: Any) -> float:
@@ -212,6 +220,15 @@ def _opening(cfg: PanelConfig, value: Any, afr: int | None) -> float:
         raise CommandError("or_pct", value, "regime 10 closes every damper: use 0 or leave "
                            "it out")
     return or_pct
+
+
+def _shown(value: Any) -> str:
+    """``repr`` of a bad value, cut (a request may carry a thousand-digit number)."""
+    try:
+        text = repr(value)
+    except ValueError:  # an int too long for str() (sys.get_int_max_str_digits)
+        return "<a number too long to show>"
+    return text if len(text) <= 120 else f"{text[:100]}… ({len(text)} characters)"
 
 
 def _minutes(seconds: float) -> str:

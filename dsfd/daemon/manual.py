@@ -175,6 +175,10 @@ class ManualStage:
                 cmd: Any = validate_command(self.cfg, row.request())
             except CommandError as exc:
                 cmd = exc
+            except Exception as exc:  # a bug in validation must not fail every cycle
+                log.exception("operator command #%d could not be validated", row.command_id)
+                cmd = CommandError("command", row.kind, f"could not be validated: "
+                                   f"{type(exc).__name__}")
             log.info("operator command #%d from %s (%s): %s", row.command_id, row.source,
                      row.requester, cmd if isinstance(cmd, CommandError) else cmd.describe())
             out.append(PendingCommand(row.command_id, cmd, row.source, row.requester))
