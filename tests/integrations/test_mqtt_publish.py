@@ -13,13 +13,18 @@ path; ``None`` is what Jinja prints for a JSON null, which the MQTT platforms ta
 
 from __future__ import annotations
 
+import json
 import re
 import subprocess
 from collections import Counter
 from pathlib import Path
 from typing import Any
 
+import pytest
+
 from dsfd.integrations.mqtt.broker import LocalBroker
+from dsfd.report.kpis import compute_kpis
+from dsfd.storage.history import read_history
 from tests.daemon.harness import ROOT, dsfd_command, query
 from tests.integrations.mqtt_harness import Message, Subscriber, mqtt_panel, run_args
 
@@ -76,9 +81,16 @@ def test_discovery_configs_and_states_arrive_as_home_assistant_expects(
     for s, (_, phi, afr, or_pct, method) in zip(states, stored, strict=True):
         assert s["command"]["louver_deg"] == phi and s["command"]["regime"] == afr
         assert s["command"]["damper_pct"] == or_pct and s["set_by"] == method
-        assert s["hold"] is None and s["hold_until_utc"] is None  # no holds yet (issue 20)
+        assert s["hold"] is False and s["hold_source"] is None and s["hold_until_utc"] is None
+        assert s["objective_mode"] == "auto" and s["objective_set_by"] == "panel file"
     x1 = dict(query(db, "SELECT cycle, value FROM samples WHERE signal = 'x1_c'"))
     assert all(s["measured"]["x1_c"] == x1[s["cycle"]] for s in states)
+    # The model's view of each cycle (table model) is what the state says.
+    model = {c: (x6, q) for c, x6, q in query(db, "SELECT cycle, est_x6_c, q_cv_rd_w "
+                                                  "FROM model")}
+    assert all((s["estimate"]["x6_c"], s["heat_w"]["q_cv_rd"]) == model[s["cycle"]]
+               for s in states)
+    assert all(isinstance(s["heat_w"]["q_cv_rd"], float) for s in states[1:])  # after cycle 1
 
     configs = {m.topic: m.json() for m in got if m.topic.startswith("homeassistant/")}
     check_discovery(configs, states, got)
@@ -87,6 +99,13 @@ def test_discovery_configs_and_states_arrive_as_home_assistant_expects(
     day_cycles = query(db, "SELECT COUNT(*) FROM decisions WHERE time_s < ?",
                        1641049200.0)[0][0]  # 2022-01-02 00:00 local (UTC+9)
     assert kpi["day"] == "2022-01-01" and kpi["cycles"] == day_cycles == 5
+    # The day's heat as dsfd report reckons it (its own code, from the whole history).
+    (config,), = query(db, "SELECT config_json FROM runs")
+    (day,) = [d for d in compute_kpis(read_history(state_dir), json.loads(config)).days
+              if d.day == "2022-01-01"]
+    assert kpi["heat_kwh"] == pytest.approx(day.heat_model_kwh, rel=1e-9)
+    assert kpi["heat_hours"] == pytest.approx(day.heat_model_hours)
+    assert all(v is not None for v in kpi["heat_kwh"].values()) and kpi["heat_hours"] > 0
     availability = [m.payload for m in got if m.topic == f"{BASE}/availability"]
     assert availability == ["online", "offline"]
 
@@ -143,7 +162,7 @@ def check_discovery(configs: dict[str, dict[str, Any]], states: list[dict[str, A
             assert cfg["payload_press"]
     assert len(set(cfg["unique_id"] for cfg in configs.values())) == len(configs)
     assert len(set(devices)) == 1  # one device per panel
-    assert components["binary_sensor"] == 1 and components["select"] == 1
+    assert components["binary_sensor"] == 1 and components["select"] == 2
     assert components["number"] == 2 and components["button"] == 1
     # x1..x5, the cavity speed and the heat terms have sensors with their device classes.
     classes = {cfg["value_template"]: cfg.get("device_class") for cfg in configs.values()

@@ -110,7 +110,8 @@ def fleet_rows(panels: Mapping[str, PanelView]) -> list[dict[str, Any]]:
             "panel": s.get("panel", name), "online": view.online, "mode": s.get("mode"),
             "set_by": s.get("set_by"), "regime": cmd.get("regime"),
             "regime_name": cmd.get("regime_name"), "louver_deg": cmd.get("louver_deg"),
-            "damper_pct": cmd.get("damper_pct"), "hold": s.get("hold"),
+            "damper_pct": cmd.get("damper_pct"),
+            "hold": (s.get("hold_source") or "yes") if s.get("hold") else None,
             "hold_until_utc": s.get("hold_until_utc"), "faults": faults,
             "last_seen_utc": s.get("time_utc"), "decision_ms": s.get("decision_ms"),
             "run": s.get("run"), "cycle": s.get("cycle"), "malformed_messages": view.malformed,
@@ -129,7 +130,8 @@ def format_table(rows: Sequence[Mapping[str, Any]]) -> str:
         regime = "-" if r["regime"] is None else (
             f"{r['regime']} {r['regime_name']}" if r["regime_name"] else str(r["regime"]))
         hold = "-" if not r["hold"] else (
-            f"until {r['hold_until_utc']}" if r["hold_until_utc"] else str(r["hold"]))
+            f"{r['hold']} until {r['hold_until_utc']}" if r["hold_until_utc"]
+            else str(r["hold"]))
         lines.append((
             str(r["panel"]), {True: "yes", False: "no", None: "?"}[r["online"]],
             str(r["mode"] or "-"), regime, _num(r["louver_deg"], "{:+.0f} deg"),

@@ -11,7 +11,8 @@ topic                  retained  QoS     payload
 ``<base>/state``       yes       1       one JSON object per cycle (:func:`state_message`)
 ``<base>/availability`` yes      1       ``online`` / ``offline`` (also the last will)
 ``<base>/kpi``         yes       1       the last completed local day (:func:`daily_kpis`)
-``<base>/cmd/...``     —         —       commands (regime, louver_deg, damper_pct, resume)
+``<base>/cmd/...``     —         —       commands in (:mod:`~.commands`)
+``<base>/error``       no        0       answers to refused commands (:mod:`~.receiver`)
 =====================  ========  ======  =====================================================
 
 Home Assistant discovery follows the documented schema (home-assistant.io/integrations/mqtt,
@@ -32,9 +33,11 @@ platforms):
   speed m/s, power W, irradiance W/m², duration ms/s; ``state_class: measurement``;
 * the faults ``binary_sensor`` has ``device_class: problem`` and compares the rendered
   template with ``payload_on``/``payload_off``;
-* the regime ``select`` needs ``command_topic`` and ``options``; the louver and damper
-  ``number`` entities have ``command_topic``, ``min``, ``max``, ``step`` and ``mode``; the
-  resume ``button`` has ``command_topic`` and ``payload_press``.
+* the regime and control-objective ``select`` entities need ``command_topic`` and
+  ``options``; the louver and damper ``number`` entities have ``command_topic``, ``min``,
+  ``max``, ``step`` and ``mode``; the resume ``button`` has ``command_topic`` and
+  ``payload_press``. What they publish is handled as :mod:`~dsfd.integrations.mqtt.commands`
+  describes.
 """
 
 from __future__ import annotations
@@ -49,11 +52,11 @@ from typing import Any
 import numpy as np
 
 from dsfd.config import PanelConfig
+from dsfd.daemon.commands import OBJECTIVE_MODES
 from dsfd.daemon.summary import REGIME_NAMES
 from dsfd.signals import SENSOR_NAMES
 
 __all__ = [
-    "COMMAND_TOPICS",
     "HEAT_TERMS",
     "daily_kpis",
     "discovery_configs",
@@ -64,11 +67,8 @@ __all__ = [
     "state_message",
 ]
 
-#: Room-side heat terms of the model (issue 21 stores them; until then they are null) [W].
+#: Room-side heat terms of the model (table ``model``, issue 21) [W].
 HEAT_TERMS: tuple[str, ...] = ("q_sol_trans", "q_cv_rd", "q_air", "q_da")
-#: Command topics under ``<base>/cmd/`` that the discovery configs point at.
-COMMAND_TOPICS: tuple[str, ...] = ("regime", "louver_deg", "damper_pct", "resume", "override",
-                                   "mode")
 GOOD = "good"
 
 
@@ -132,14 +132,15 @@ def state_message(panel_id: str, row: Mapping[str, Any],
                     "regime_name": REGIME_NAMES.get(afr), "regime_option": regime_option(afr),
                     "damper_pct": float(row["or_pct"])},
         "write": row.get("write_status"),
-        # Operator holds arrive with issue 20; the fields are here so consumers need no change.
-        "hold": None, "hold_source": None, "hold_until_utc": None,
+        **_hold_fields(row),
+        "objective_mode": row.get("objective_mode"),
+        "objective_set_by": _objective_by(row),
         "measured": {n: (v if q == GOOD and v is not None else None)
                      for n, (v, q) in samples.items() if n in _SENSOR_SET},
         "flagged": flagged,
         "fault": bool(faults), "faults": faults,
-        "estimate": None,
-        "heat_w": dict.fromkeys(HEAT_TERMS),
+        "estimate": {f"x{i}_c": _float(row.get(f"est_x{i}_c")) for i in range(1, 7)},
+        "heat_w": {q: _float(row.get(f"{q}_w")) for q in HEAT_TERMS},
         "decision_ms": timings.get("decide"),
         "cycle_ms": _float(row.get("cycle_ms")),
         "calibration_age_s": None if calibrated_s is None else max(time_s - calibrated_s, 0.0),
@@ -148,6 +149,26 @@ def state_message(panel_id: str, row: Mapping[str, Any],
 
 
 _SENSOR_SET = frozenset(SENSOR_NAMES)
+
+
+def _hold_fields(row: Mapping[str, Any]) -> dict[str, Any]:
+    """The manual hold of a cycle (``decisions.hold_*``, issue 20) and who gave an operator
+    hold (its ``commands`` row)."""
+    source = row.get("hold_source")
+    expires = row.get("hold_expires_s")
+    by = None
+    if row.get("hold_by_source"):
+        by = f"{row['hold_by_source']} {row.get('hold_by_requester') or ''}".strip()
+    return {"hold": source is not None, "hold_source": source,
+            "hold_until_utc": None if expires is None else utc_iso(float(expires)),
+            "hold_by": by, "hold_command_id": row.get("hold_command_id")}
+
+
+def _objective_by(row: Mapping[str, Any]) -> str | None:
+    if row.get("objective_mode") is None:
+        return None
+    cid = row.get("mode_command_id")
+    return "panel file" if cid is None else f"operator command #{cid}"
 
 
 def _json_list(text: Any) -> list[dict[str, Any]]:
@@ -184,9 +205,11 @@ def day_bounds_s(day: date, utc_offset_h: float) -> tuple[float, float]:
 
 
 def daily_kpis(panel_id: str, day: date, rows: Sequence[Mapping[str, Any]], *,
-               utc_offset_h: float, flagged_samples: int, calibration_updates: int
+               utc_offset_h: float, flagged_samples: int, calibration_updates: int,
+               heat_kwh: Mapping[str, float | None] | None = None, heat_hours: float = 0.0
                ) -> dict[str, Any]:
-    """Key figures of one local day from its ``decisions`` rows in cycle order."""
+    """Key figures of one local day from its ``decisions`` rows in cycle order, with the
+    model's heat into the room by term [kWh] over ``heat_hours`` of steps with figures."""
     methods: dict[str, int] = {}
     for r in rows:
         methods[str(r["method"])] = methods.get(str(r["method"]), 0) + 1
@@ -204,7 +227,8 @@ def daily_kpis(panel_id: str, day: date, rows: Sequence[Mapping[str, Any]], *,
         "calibration_updates": calibration_updates,
         "decision_ms_p50": float(np.percentile(decide, 50)) if decide.size else None,
         "decision_ms_p99": float(np.percentile(decide, 99)) if decide.size else None,
-        "heat_kwh": dict.fromkeys(HEAT_TERMS),
+        "heat_kwh": {q: (heat_kwh or {}).get(q) for q in HEAT_TERMS},
+        "heat_hours": heat_hours,
     }
 
 
@@ -236,6 +260,7 @@ _SENSORS: tuple[tuple[str, str, str, str | None, str], ...] = (
     ("v_cav", "Cavity air speed", "measured.v_cav_ms", "speed", "m/s"),
     ("t_out", "Outdoor air", "measured.t_out_c", "temperature", "°C"),
     ("ghi", "Global horizontal irradiance", "measured.ghi_wm2", "irradiance", "W/m²"),
+    ("x6_est", "DGU gas gap (x6, estimated)", "estimate.x6_c", "temperature", "°C"),
     ("q_sol_trans", "Solar heat transmitted", "heat_w.q_sol_trans", "power", "W"),
     ("q_cv_rd", "Convective and long-wave heat", "heat_w.q_cv_rd", "power", "W"),
     ("q_air", "Ventilation air heat", "heat_w.q_air", "power", "W"),
@@ -270,6 +295,10 @@ def discovery_configs(cfg: PanelConfig, *, base_topic: str, discovery_prefix: st
             device_class=device_class, unit_of_measurement=unit, state_class="measurement")
     add("sensor", "set_by", "Command set by", state_topic=state,
         value_template="{{ value_json.set_by }}", icon="mdi:account-cog")
+    add("sensor", "hold", "Manual hold", state_topic=state,
+        value_template="{{ value_json.hold_source }}", icon="mdi:hand-back-right",
+        json_attributes_topic=state, json_attributes_template="{{ {'until': "
+        "value_json.hold_until_utc, 'by': value_json.hold_by} | tojson }}")
     add("binary_sensor", "fault", "Fault", state_topic=state, device_class="problem",
         value_template="{{ value_json.fault }}", payload_on="True", payload_off="False",
         json_attributes_topic=state,
@@ -279,6 +308,9 @@ def discovery_configs(cfg: PanelConfig, *, base_topic: str, discovery_prefix: st
         value_template="{{ value_json.command.regime_option }}", command_topic=f"{cmd}/regime",
         options=[regime_option(r) for r in cfg.openings.available_regimes()], qos=1,
         retain=False)
+    add("select", "objective", "Control objective", state_topic=state,
+        value_template="{{ value_json.objective_mode }}", command_topic=f"{cmd}/mode",
+        options=list(OBJECTIVE_MODES), qos=1, retain=False, icon="mdi:sun-snowflake-variant")
     s = cfg.safety
     if cfg.louver is not None:
         angles = [a for a in cfg.louver.angles_deg()

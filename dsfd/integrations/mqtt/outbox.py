@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from dsfd.integrations.mqtt.messages import day_bounds_s
+from dsfd.report.kpis import J_PER_KWH
 from dsfd.storage.timeseries import BUSY_TIMEOUT_MS, iso_now
 
 __all__ = ["Key", "Outbox", "PendingCycle", "Status"]
@@ -32,7 +33,21 @@ Key = tuple[int, int]
 
 _DECISION_COLUMNS = ("run_id, cycle, slot, time_s, time_utc, method, fallback_reason, heating, "
                      "phi_deg, afr, or_pct, write_status, trace, timings_ms, cycle_ms, "
-                     "skipped_slots")
+                     "skipped_slots, hold_source, hold_expires_s, hold_command_id, "
+                     "objective_mode, mode_command_id")
+#: What the model made of a cycle (table ``model``, issue 21): the state estimate and the
+#: room-side heat of the step that ended, with the names the state message uses.
+MODEL_FIELDS: tuple[str, ...] = (*(f"est_x{i}_c" for i in range(1, 7)),
+                                 *(f"{q}_w" for q in ("q_sol_trans", "q_cv_rd", "q_air",
+                                                      "q_da")))
+_STATE_QUERY = (
+    "SELECT " + ", ".join(f"d.{c.strip()}" for c in _DECISION_COLUMNS.split(","))
+    + ", " + ", ".join(f"m.{c}" for c in MODEL_FIELDS)
+    + ", runs.mode AS mode, c.source AS hold_by_source, c.requester AS hold_by_requester "
+    "FROM decisions d JOIN runs USING (run_id) "
+    "LEFT JOIN model m ON m.run_id = d.run_id AND m.cycle = d.cycle "
+    "LEFT JOIN commands c ON c.command_id = d.hold_command_id "
+    "WHERE (d.run_id, d.cycle) > (?, ?) AND d.time_s >= ? ORDER BY d.run_id, d.cycle LIMIT ?")
 
 
 @dataclass(frozen=True)
@@ -132,10 +147,7 @@ class Outbox:
         oldest = self.oldest_allowed_s(max_age_s)
         if oldest is None or limit <= 0:
             return [], 0, None
-        rows = self.conn.execute(
-            f"SELECT {_DECISION_COLUMNS}, runs.mode AS mode FROM decisions "
-            "JOIN runs USING (run_id) WHERE (run_id, cycle) > (?, ?) AND time_s >= ? "
-            "ORDER BY run_id, cycle LIMIT ?", (*after, oldest, limit)).fetchall()
+        rows = self.conn.execute(_STATE_QUERY, (*after, oldest, limit)).fetchall()
         if not rows:
             return [], 0, None
         first: Key = (int(rows[0]["run_id"]), int(rows[0]["cycle"]))
@@ -192,3 +204,18 @@ class Outbox:
             "SELECT COUNT(*) FROM parameters WHERE source = 'online' AND time_s >= ? "
             "AND time_s < ?", (start, end)).fetchone()[0]
         return rows, int(flagged), int(updates)
+
+    def day_heat(self, day: date, utc_offset_h: float, *, step_s: float
+                 ) -> tuple[dict[str, float | None], float]:
+        """The model's heat into the room over a local day [kWh] by term, and the hours its
+        steps cover. A cycle's ``model`` row holds the step-mean heat [W] of the step that
+        ended at it; the step belongs to the day of its midpoint (as in ``dsfd report``)."""
+        start, end = day_bounds_s(day, utc_offset_h)
+        terms = ("q_sol_trans", "q_cv_rd", "q_air", "q_da")
+        row = self.conn.execute(
+            f"SELECT {', '.join(f'SUM({q}_w)' for q in terms)}, COUNT(q_cv_rd_w) FROM model "
+            "WHERE time_s - ? >= ? AND time_s - ? < ?",
+            (step_s / 2, start, step_s / 2, end)).fetchone()
+        kwh = {q: None if v is None else float(v) * step_s / J_PER_KWH
+               for q, v in zip(terms, row[:-1], strict=True)}
+        return kwh, int(row[-1]) * step_s / 3600.0

@@ -45,6 +45,7 @@ from dsfd.integrations.mqtt.messages import (
     state_message,
 )
 from dsfd.integrations.mqtt.outbox import Key, Outbox, Status
+from dsfd.integrations.mqtt.receiver import CommandReceiver
 from dsfd.storage.timeseries import iso_now
 
 if TYPE_CHECKING:
@@ -67,17 +68,23 @@ DRAIN_ON_STOP_S = 2.0
 class _Connection:
     """One connection attempt: the paho client and what its callbacks report."""
 
-    def __init__(self, client: Client, wake: threading.Event) -> None:
+    def __init__(self, client: Client, wake: threading.Event,
+                 receiver: CommandReceiver) -> None:
         self.client = client
         self.connack = threading.Event()
         self.lost = threading.Event()
         self.refused: str = ""
         self.lost_reason: str = ""
+        #: The broker's answer to the command subscription: "" granted, else why not.
+        self.subscription: str | None = None
         self.acks: queue.SimpleQueue[int] = queue.SimpleQueue()
         client.on_connect = self._on_connect
         client.on_disconnect = self._on_disconnect
         client.on_publish = self._on_publish
+        client.on_subscribe = self._on_subscribe
+        client.on_message = self._on_message
         self._wake = wake
+        self._receiver = receiver
 
     # paho's network thread calls these (CallbackAPIVersion.VERSION2 signatures)
     def _on_connect(self, _c: Any, _u: Any, _flags: Any, reason_code: Any, _p: Any) -> None:
@@ -94,6 +101,17 @@ class _Connection:
     def _on_publish(self, _c: Any, _u: Any, mid: int, _reason: Any, _p: Any) -> None:
         self.acks.put(mid)
         self._wake.set()
+
+    def _on_subscribe(self, _c: Any, _u: Any, _mid: int, reason_codes: Any, _p: Any) -> None:
+        refused = [reason_text(r) for r in reason_codes if r.is_failure]
+        self.subscription = ", ".join(refused)
+        self._wake.set()
+
+    def _on_message(self, _c: Any, _u: Any, message: Any) -> None:
+        # A command message: queued for the receiver's thread, never handled here; nothing
+        # may escape into paho's network thread (a topic that is not UTF-8, say).
+        with contextlib.suppress(Exception):
+            self._receiver.offer(message.topic, message.payload, message.retain)
 
 
 class MqttPublisher:
@@ -113,6 +131,12 @@ class MqttPublisher:
         self.destination = f"{link.address} {self.base}"
         self.state_topic = f"{self.base}/state"
         self.availability_topic = f"{self.base}/availability"
+        self.error_topic = f"{self.base}/error"
+        self.command_filter = f"{self.base}/cmd/#"
+        self.receiver = CommandReceiver(cfg, base_topic=self.base, broker=link.address,
+                                        answer=self._answer)
+        #: The connected client (for the receiver's answers), None while not connected.
+        self._live: Client | None = None
         self._wake = threading.Event()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -136,6 +160,7 @@ class MqttPublisher:
         self._thread = threading.Thread(target=ctx.run, args=(self._main, database),
                                         name="dsfd-mqtt", daemon=True)
         self._thread.start()
+        self.receiver.start(database=database)
 
     def cycle_stored(self, cycle: int) -> None:
         """A cycle was committed: wake the thread (returns at once)."""
@@ -149,6 +174,7 @@ class MqttPublisher:
             self._thread.join(timeout_s)
             if self._thread.is_alive():
                 log.warning("MQTT publisher did not stop within %g s; abandoned", timeout_s)
+        self.receiver.stop()
 
     # ------------------------------------------------------------------ the thread
     def _main(self, database: Path) -> None:
@@ -180,7 +206,7 @@ class MqttPublisher:
         client.will_set(self.availability_topic, "offline", qos=1, retain=True)
         client.max_inflight_messages_set(WINDOW)
         client.max_queued_messages_set(WINDOW + 64)  # + availability, discovery, KPIs
-        conn = _Connection(client, self._wake)
+        conn = _Connection(client, self._wake, self.receiver)
         address = self.link.address
         try:
             client.connect(self.link.host, self.link.port, keepalive=self.link.keepalive_s)
@@ -229,6 +255,9 @@ class MqttPublisher:
                  backlog=backlog, after_failures=self._failures or None)
         self._failures = 0
         client.publish(self.availability_topic, "online", qos=1, retain=True)
+        # Each connection is a clean session: subscribe again every time.
+        client.subscribe(self.command_filter, qos=1)
+        self._live = client
         if self.discovery_prefix is not None:
             for topic, config in discovery_configs(self.cfg, base_topic=self.base,
                                                    discovery_prefix=self.discovery_prefix,
@@ -245,6 +274,7 @@ class MqttPublisher:
             self._send_more(client)
             self._publish_kpi(client)
             self._save()
+            self._subscribed(conn)
         if self._stop.is_set() and not conn.lost.is_set():
             self._drain(conn)
         if conn.lost.is_set() and not self._stop.is_set():
@@ -252,6 +282,26 @@ class MqttPublisher:
             self._failed(f"MQTT connection to {self.link.address} lost: "
                          f"{conn.lost_reason or 'closed'} ({len(self._inflight)} state "
                          "message(s) unacknowledged, sent again on reconnect)")
+
+    def _subscribed(self, conn: _Connection) -> None:
+        """Log the broker's answer to the command subscription once per connection."""
+        if conn.subscription is None:
+            return
+        if conn.subscription:
+            log.warning("the MQTT broker refused the subscription to %s (%s): commands over "
+                        "MQTT do not reach this panel (the broker's ACL?)",
+                        self.command_filter, conn.subscription, broker=self.link.address)
+        conn.subscription = None
+
+    def _answer(self, text: str) -> None:
+        """Publish an answer on ``<base>/error`` (QoS 0, not retained) if connected."""
+        client = self._live
+        if client is None:
+            return
+        try:
+            client.publish(self.error_topic, text, qos=0, retain=False)
+        except (ValueError, RuntimeError, OSError) as exc:
+            log.debug("MQTT answer not published: %s", exc)
 
     def _drain(self, conn: _Connection) -> None:
         """At a clean stop: the cycles stored so far go out (bounded by
@@ -333,8 +383,10 @@ class MqttPublisher:
         rows, flagged, updates = self.outbox.day_rows(day, offset)
         if not rows:
             return
+        heat, hours = self.outbox.day_heat(day, offset, step_s=self.cfg.model.step_s)
         kpis = daily_kpis(self.cfg.panel.id, day, rows, utc_offset_h=offset,
-                          flagged_samples=flagged, calibration_updates=updates)
+                          flagged_samples=flagged, calibration_updates=updates,
+                          heat_kwh=heat, heat_hours=hours)
         client.publish(f"{self.base}/kpi", dumps(kpis), qos=1, retain=True)
         self.status.kpi_day = day.isoformat()
         self._dirty = True
@@ -360,6 +412,7 @@ class MqttPublisher:
 
     def _close(self, conn: _Connection, *, graceful: bool) -> None:
         client = conn.client
+        self._live = None
         if graceful and client.is_connected():
             info = client.publish(self.availability_topic, "offline", qos=1, retain=True)
             with contextlib.suppress(RuntimeError, ValueError):
