@@ -26,6 +26,21 @@ dsfd_hold_active                       gauge    1 while a manual hold decides (m
 dsfd_room_heat_watts{term}             gauge    the model's room-side heat of the last step
 =====================================  =======  ==============================================
 
+With an ``mqtt:`` section, the broker's state as the publisher last saw it:
+
+=====================================  =======  ==============================================
+dsfd_mqtt_connected                    gauge    1 while connected to the broker
+dsfd_mqtt_error{reason}                gauge    1 while not connected after an error (``reason``
+                                                the last one: refused, not authorised, …)
+dsfd_mqtt_backlog_cycles               gauge    stored cycles whose state is not yet delivered
+dsfd_mqtt_delivered_cycle{run}         gauge    the last cycle the broker acknowledged
+dsfd_mqtt_delivered_timestamp_seconds  gauge    its cycle time, UTC (NaN: none yet)
+dsfd_mqtt_delivered_total              counter  state messages acknowledged
+dsfd_mqtt_commands_total{result}       counter  command messages: ``queued`` (into the commands
+                                                table), ``refused`` (malformed, out of range),
+                                                ``rejected`` (by the loop), ``dropped``
+=====================================  =======  ==============================================
+
 Counters count since the daemon started (Prometheus handles the restart); the counters'
 ``*_created`` series are left out.
 """
@@ -33,8 +48,9 @@ Counters count since the daemon started (Prometheus handles the restart); the co
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from dsfd.daemon.calibration import CalibrationStage
@@ -108,6 +124,7 @@ class MetricsFile:
         self.calibration_age.labels(panel).set(math.nan)
         self.write_failures.labels(panel)
         self.updates.labels(panel)
+        self._mqtt: _MqttMetrics | None = None
 
     def update(self, out: CycleOutcome, calibration: CalibrationStage) -> None:
         """Take the figures of a completed cycle."""
@@ -137,8 +154,63 @@ class MetricsFile:
         for term in ("q_cv_rd", "q_sol_trans", "q_air", "q_da"):
             self.heat.labels(panel, term).set(math.nan if pred is None else pred.heat_w[term])
 
+    def update_mqtt(self, health: Mapping[str, Any]) -> None:
+        """Take the MQTT publisher's state (``MqttPublisher.health``)."""
+        if self._mqtt is None:
+            self._mqtt = _MqttMetrics(self.registry)
+        self._mqtt.update(self.panel, health)
+
     def write(self) -> None:
         """Replace the file atomically (raises OSError if it cannot)."""
         from prometheus_client import write_to_textfile
 
         write_to_textfile(self.path, self.registry)
+
+
+class _MqttMetrics:
+    """The broker's state (series only with an ``mqtt:`` section)."""
+
+    def __init__(self, registry: Any) -> None:
+        from prometheus_client import Counter, Gauge
+
+        p = ["panel"]
+        r = registry
+        self.connected = Gauge("dsfd_mqtt_connected", "1 while connected to the MQTT broker",
+                               p, registry=r)
+        self.error = Gauge("dsfd_mqtt_error", "1 while not connected to the broker after an "
+                           "error; reason: the last error", [*p, "reason"], registry=r)
+        self.backlog = Gauge("dsfd_mqtt_backlog_cycles", "Stored cycles whose state message "
+                             "is not yet acknowledged by the broker", p, registry=r)
+        self.cycle = Gauge("dsfd_mqtt_delivered_cycle", "The last cycle whose state the "
+                           "broker acknowledged (with all before it)", [*p, "run"], registry=r)
+        self.time = Gauge("dsfd_mqtt_delivered_timestamp_seconds", "Cycle time of the last "
+                          "acknowledged state, UTC unix seconds (NaN: none yet)", p, registry=r)
+        self.delivered = Counter("dsfd_mqtt_delivered", "State messages acknowledged by the "
+                                 "broker", p, registry=r)
+        self.commands = Counter("dsfd_mqtt_commands", "Command messages by what became of "
+                                "them", [*p, "result"], registry=r)
+        # The publisher's command counts start with this process; its delivered count spans
+        # earlier runs (kept in the database), so its first value is the baseline.
+        self._seen: dict[str, float] = dict.fromkeys(("queued", "refused", "rejected",
+                                                      "dropped"), 0.0)
+
+    def update(self, panel: str, h: Mapping[str, Any]) -> None:
+        self.connected.labels(panel).set(1.0 if h["connected"] else 0.0)
+        self.error.clear()  # one series: the reason of now
+        failed = not h["connected"] and bool(h["last_error"])
+        self.error.labels(panel, h["last_error"] if failed else "").set(1.0 if failed else 0.0)
+        self.backlog.labels(panel).set(h["backlog"])
+        self.cycle.clear()
+        self.cycle.labels(panel, str(h["delivered_run"])).set(h["delivered_cycle"])
+        t = h["delivered_time_s"]
+        self.time.labels(panel).set(math.nan if t is None else t)
+        self._count(self.delivered.labels(panel), "delivered", h["delivered"])
+        for result, n in h["commands"].items():
+            self._count(self.commands.labels(panel, result), result, n)
+
+    def _count(self, counter: Any, key: str, total: float) -> None:
+        """Counters move by what the publisher counted since the last cycle."""
+        last = self._seen.get(key)
+        self._seen[key] = total
+        if last is not None and total > last:
+            counter.inc(total - last)

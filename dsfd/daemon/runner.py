@@ -25,7 +25,7 @@ import sqlite3
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Protocol
+from typing import Any, Protocol
 
 from dsfd import __version__
 from dsfd.config import ConfigError, ConfigIssue, PanelConfig
@@ -91,6 +91,10 @@ class Integration(Protocol):
     def cycle_stored(self, cycle: int) -> None: ...
 
     def stop(self) -> None: ...
+
+    def health(self) -> Mapping[str, Any]:
+        """Its state for the metrics file (called on the loop after each cycle: quick)."""
+        ...
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -207,6 +211,9 @@ class _Daemon:
             return
         try:
             self.metrics.update(out, self.controller.calibration)
+            for integration in self.integrations:
+                if integration.name == "mqtt":
+                    self.metrics.update_mqtt(integration.health())
             self.metrics.write()
         except Exception as exc:  # metrics must never stop the control of the panel
             self.metrics_failures += 1

@@ -14,9 +14,10 @@ import subprocess
 from pathlib import Path
 
 import pytest
+from prometheus_client.parser import text_string_to_metric_families
 
 from dsfd.integrations.mqtt.broker import LocalBroker, make_test_ca
-from tests.daemon.harness import ROOT, DaemonProcess, dsfd_command, query
+from tests.daemon.harness import ROOT, DaemonProcess, dsfd_command, query, run_dsfd
 from tests.integrations.mqtt_harness import Subscriber, mosquitto_missing, mqtt_panel, run_args
 
 MORNING = "2022-01-01T23:30:00Z"
@@ -24,19 +25,26 @@ MORNING = "2022-01-01T23:30:00Z"
 
 def test_wrong_password_is_a_clear_error_and_control_goes_on(
         broker: LocalBroker, tmp_path: Path) -> None:
-    panel = mqtt_panel(tmp_path / "panel.yaml", broker, password="not-the-password")
+    prom = tmp_path / "dsfd-test.prom"
+    panel = mqtt_panel(tmp_path / "panel.yaml", broker, password="not-the-password",
+                       extra={"daemon": {"metrics_file": str(prom)}})
     state = tmp_path / "state"
 
-    async def run() -> DaemonProcess:
-        daemon = await DaemonProcess(run_args(panel, state, start=MORNING, cycles=8,
+    async def run() -> tuple[DaemonProcess, tuple[int, str, str]]:
+        daemon = await DaemonProcess(run_args(panel, state, start=MORNING, cycles=400,
                                               speed=240.0)).start()
+        await daemon.wait_cycle(6)
+        status = await run_dsfd("status", "--state-dir", str(state))
+        await daemon.wait_cycle(daemon.cycles_logged[-1] + 2)
+        daemon.signal(signal.SIGTERM)
         assert await daemon.wait_exit() == 0, daemon.stderr
-        return daemon
+        return daemon, status
 
-    daemon = asyncio.run(run())
-    assert daemon.cycles_logged == list(range(1, 9))  # control went on
+    daemon, (rc, status, err) = asyncio.run(run())
+    n = len(daemon.cycles_logged)
+    assert n >= 8 and daemon.cycles_logged == list(range(1, n + 1))  # control went on
     db = state / "timeseries.sqlite"
-    assert query(db, "SELECT COUNT(*) FROM decisions")[0][0] == 8
+    assert query(db, "SELECT COUNT(*) FROM decisions")[0][0] == n
     errors = [r for r in daemon.records if r.get("level") == "error"]
     assert len(errors) == 1, errors  # once, not once per attempt
     message = errors[0]["event"]
@@ -46,6 +54,15 @@ def test_wrong_password_is_a_clear_error_and_control_goes_on(
                                                 "FROM mqtt_cursor")
     assert connected == 0 and "not authorised" in last_error and cycle == 0
     assert "not authorised" in broker.log()  # the broker's own account of it
+    # dsfd status (while running) and the metrics file (of the last cycle) say so too.
+    assert rc == 0, err
+    assert f"mqtt:        {broker.address} dsfd/suwon-south: not connected; " in status
+    assert "none delivered yet" in status and "not authorised" in status.split("mqtt:")[1]
+    fam = {f.name: f.samples for f in text_string_to_metric_families(prom.read_text())}
+    assert fam["dsfd_mqtt_connected"][0].value == 0.0
+    (error,) = fam["dsfd_mqtt_error"]
+    assert error.value == 1.0 and "not authorised" in error.labels["reason"]
+    assert fam["dsfd_mqtt_backlog_cycles"][0].value >= 1
 
 
 def test_fleet_lists_three_daemons_with_their_regimes(broker: LocalBroker,

@@ -196,10 +196,31 @@ class MqttPublisher:
                         self._close(conn, graceful=self._stop.is_set())
                 if self._stop.is_set():
                     break
-                self._stop.wait(self.backoff.next_delay())
+                self._idle(self.backoff.next_delay())
         finally:
             self._save(force=True)
             self.outbox.close()
+
+    def _idle(self, delay_s: float) -> None:
+        """Wait before the next attempt; the backlog (``dsfd status``, the metrics) keeps
+        counting the cycles stored meanwhile."""
+        deadline = time.monotonic() + delay_s
+        while not self._stop.is_set() and (left := deadline - time.monotonic()) > 0:
+            if self._wake.wait(min(left, 1.0)):
+                self._wake.clear()
+                self._dirty = True
+                self._save()
+
+    def health(self) -> dict[str, Any]:
+        """The broker's state for the metrics file (read from the loop's thread: a snapshot
+        of plain values the publisher's threads keep)."""
+        st, r = self.status, self.receiver
+        return {"connected": st.connected, "last_error": st.last_error,
+                "backlog": st.backlog, "delivered": st.delivered,
+                "delivered_run": self.acked[0], "delivered_cycle": self.acked[1],
+                "delivered_time_s": self.acked_time_s,
+                "commands": {"queued": r.queued, "refused": r.refused, "rejected": r.rejected,
+                             "dropped": r.dropped}}
 
     def _connect(self) -> _Connection | None:
         client = new_client(self.link)
