@@ -1,17 +1,19 @@
 """The ``commands`` table: how operator requests reach the running daemon, durably and audited.
 
-One path for every source. A front end (``dsfd override``/``resume`` now, the MQTT client
-later) validates the request with :func:`dsfd.daemon.commands.validate_command` and, if it
-is well-formed, inserts a ``pending`` row with :func:`submit` naming its ``source`` and
-``requester``. Every cycle the daemon's loop reads the pending rows (:func:`pending`),
-validates each again against the configuration it runs, applies it, and marks it
-``applied`` or ``rejected`` with the reason in the same transaction as the cycle's rows
+One path for every source. A front end (``dsfd override``/``resume``/``mode``, and the MQTT
+receiver, :mod:`dsfd.integrations.mqtt.receiver`) validates the request with
+:func:`dsfd.daemon.commands.validate_command` and, if it is well-formed, inserts a
+``pending`` row with :func:`submit` naming its ``source`` and ``requester``. Every cycle the
+daemon's loop reads the pending rows (:func:`pending`), validates each again against the
+configuration it runs, applies it, and marks it ``applied`` or ``rejected`` with the reason
+in the same transaction as the cycle's rows
 (:meth:`dsfd.storage.timeseries.Store.append`). :func:`outcome` reads that answer back. A
 request the daemon does not pick up within :data:`MAX_AGE_S` is rejected as expired, so a
 command never takes effect long after it was given.
 
-No network listener: only who may write the database may command the panel (README,
-"Operator commands").
+No network listener of the daemon's own: who may write the database, or publish to the
+panel's ``<base>/cmd/`` topics on the broker (its ACL), may command the panel (README,
+"Operator commands", "Commands over MQTT").
 """
 
 from __future__ import annotations

@@ -121,3 +121,19 @@ def test_the_receiver_files_commands_as_the_cli_does_and_answers_the_rest(cfg,
     assert answers[2]["reason"] == "regime: 11: expected an airflow regime 1..10"
     assert (r.queued, r.refused) == (1, 3)
     store.close()
+
+
+def test_a_flood_beyond_the_queue_is_dropped_counted_and_answered_once(cfg) -> None:
+    from dsfd.integrations.mqtt.receiver import QUEUE_SIZE
+
+    answers: list[dict] = []
+    r = CommandReceiver(cfg, base_topic=BASE, broker="b:1883",
+                        answer=lambda text: answers.append(json.loads(text)))
+    for _ in range(QUEUE_SIZE + 44):  # paho's thread, while the receiver's is busy
+        r.offer(f"{BASE}/cmd/resume", b"resume", False)
+    assert r.queue.qsize() == QUEUE_SIZE and r.dropped == 44
+    r._answer_drops()
+    r._answer_drops()  # nothing new: no second answer
+    assert [(a["topic"], a["reason"]) for a in answers] == [
+        (f"{BASE}/cmd/#", f"44 command message(s) dropped unread: more than {QUEUE_SIZE} "
+         "were waiting")]

@@ -2,7 +2,9 @@
 
 * :class:`~dsfd.integrations.mqtt.publisher.MqttPublisher` — state per cycle, availability with
   a last will, daily KPIs and Home Assistant discovery, sent from the database beside the
-  loop (``dsfd run`` with an ``mqtt:`` section);
+  loop (``dsfd run`` with an ``mqtt:`` section); its client also takes the commands on
+  ``<base>/cmd/...`` (:mod:`~dsfd.integrations.mqtt.commands`: payloads,
+  :mod:`~dsfd.integrations.mqtt.receiver`: into the daemon's ``commands`` table);
 * :mod:`~dsfd.integrations.mqtt.fleet` — ``dsfd fleet``: one line per panel on a broker;
 * :mod:`~dsfd.integrations.mqtt.broker` — a local Mosquitto for benchmarks and tests.
 
