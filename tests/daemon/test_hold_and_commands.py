@@ -314,3 +314,19 @@ def test_an_operators_objective_lasts_until_the_file_changes_and_survives_a_rest
                                                  "mode_command_id": None},
                                                 file_mode_then="auto") is None
     store.close()
+    # At start the runner finds the previous run's control.mode in its stored configuration.
+    from dsfd.daemon.runner import _file_mode_of
+    from dsfd.storage.queries import last_decision
+    from dsfd.storage.timeseries import CycleRecord
+
+    store = Store.open(tmp_path / "again")
+    store.begin_run(panel=cfg.panel.id, mode="test", version="0", config_path=None,
+                    config=dataclasses.asdict(heating_file))
+    store.append(CycleRecord(cycle=1, time_s=T0, samples=[], decision={
+        "slot": 0, "time_s": T0, "time_utc": "t", "method": "mpc", "phi_deg": 0.0, "afr": 10,
+        "or_pct": 0.0, "write_status": "verified", "cycle_ms": 1.0,
+        "objective_mode": "cooling", "mode_command_id": 7}))
+    last = last_decision(store.reader())
+    assert _file_mode_of(store, last) == "heating"
+    assert ManualStage(cfg, store).restore_mode(last, file_mode_then="heating") is None
+    store.close()

@@ -256,6 +256,10 @@ def test_status_and_commands_need_no_lock_and_refuse_without_a_daemon(tmp_path: 
                                         str(state))
         out["override"] = await run_dsfd("override", "--config", str(panel), "--state-dir",
                                          str(state), "--hold", "1h")
+        out["mode"] = await run_dsfd("mode", "--config", str(panel), "--state-dir",
+                                     str(state), "cooling")
+        out["bad mode"] = await run_dsfd("mode", "--config", str(panel), "--state-dir",
+                                         str(state), "summer")
         return out
 
     got = asyncio.run(scenario())
@@ -265,4 +269,8 @@ def test_status_and_commands_need_no_lock_and_refuse_without_a_daemon(tmp_path: 
     assert rc == 3 and "daemon not running" in text and "last cycle:  2 at" in text
     rc, _, err = got["override"]
     assert rc == 3 and "no daemon is running" in err and "nothing was queued" in err
+    rc, _, err = got["mode"]
+    assert rc == 3 and "no daemon is running" in err
+    rc, _, err = got["bad mode"]  # the request is checked before anything else
+    assert rc == 2 and "OBJECTIVE summer: expected one of heating, cooling, auto" in err
     assert query(state / "timeseries.sqlite", "SELECT COUNT(*) FROM commands") == [(0,)]
