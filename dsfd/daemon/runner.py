@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import asyncio
 import dataclasses
-import json
 import logging
 import signal
 import sqlite3
@@ -41,7 +40,7 @@ from dsfd.drivers.base import Driver
 from dsfd.measured import iso_utc
 from dsfd.physics.model import LumpedModel
 from dsfd.storage.lock import StateLock
-from dsfd.storage.queries import last_decision, parameter_history
+from dsfd.storage.queries import last_decision, parameter_history, run_control_mode
 from dsfd.storage.timeseries import Store
 
 __all__ = ["Integration", "PlantUnderTest", "RunOptions", "load_for_run", "runtime_problems",
@@ -356,7 +355,7 @@ async def _serve_locked(opts: RunOptions, cfg: PanelConfig, *, state_dir: Path,
         log.warning("manual hold of the previous run restored: %s", restored)
         store.event(cycle=0, time_s=clock.wall(), level="info", kind="hold_restored",
                     message=restored)
-    objective = controller.manual.restore_mode(last, file_mode_then=_file_mode_of(store, last))
+    objective = controller.manual.restore_mode(last, file_mode_then=_control_mode_of(store, last))
     if objective:
         log.warning("operator's choice of the previous run restored: %s", objective)
         store.event(cycle=0, time_s=clock.wall(), level="info", kind="mode_restored",
@@ -436,14 +435,9 @@ def _last_decision(store: Store) -> dict[str, object] | None:
         return None
 
 
-def _file_mode_of(store: Store, last: Mapping[str, object] | None) -> str | None:
+def _control_mode_of(store: Store, last: Mapping[str, object] | None) -> str | None:
     """``control.mode`` of the panel file the run of ``last`` used (None: unknown)."""
-    if not last:
-        return None
     try:
-        row = store.reader().execute("SELECT config_json FROM runs WHERE run_id = ?",
-                                     (last["run_id"],)).fetchone()
-        mode = json.loads(row[0])["control"]["mode"] if row and row[0] else None
-    except (sqlite3.Error, ValueError, KeyError, TypeError):
+        return None if not last else run_control_mode(store.reader(), int(last["run_id"]))
+    except sqlite3.Error:
         return None
-    return mode if isinstance(mode, str) else None

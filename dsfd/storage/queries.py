@@ -16,7 +16,8 @@ from typing import Any
 
 from dsfd.config.panel import PARAMETER_NAMES
 
-__all__ = ["columns", "last_decision", "open_read_only", "parameter_history"]
+__all__ = ["columns", "last_decision", "open_read_only", "parameter_history",
+           "run_control_mode"]
 
 
 def open_read_only(db: Path) -> sqlite3.Connection:
@@ -56,6 +57,17 @@ def last_decision(conn: sqlite3.Connection) -> dict[str, Any] | None:
     if row is None:
         return None
     return dict(zip([d[0] for d in cur.description], row, strict=True))
+
+
+def run_control_mode(conn: sqlite3.Connection, run_id: int) -> str | None:
+    """``control.mode`` of the panel configuration run ``run_id`` used (``runs.config_json``;
+    None for a run of schema 1 or 2, or a configuration without it)."""
+    row = conn.execute("SELECT config_json FROM runs WHERE run_id = ?", (run_id,)).fetchone()
+    try:
+        mode = json.loads(row[0])["control"]["mode"] if row and row[0] else None
+    except (ValueError, KeyError, TypeError):
+        return None
+    return mode if isinstance(mode, str) else None
 
 
 def parameter_history(conn: sqlite3.Connection, panel: str, *, limit: int = 50

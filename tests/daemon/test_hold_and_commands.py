@@ -315,8 +315,7 @@ def test_an_operators_objective_lasts_until_the_file_changes_and_survives_a_rest
                                                 file_mode_then="auto") is None
     store.close()
     # At start the runner finds the previous run's control.mode in its stored configuration.
-    from dsfd.daemon.runner import _file_mode_of
-    from dsfd.storage.queries import last_decision
+    from dsfd.storage.queries import last_decision, run_control_mode
     from dsfd.storage.timeseries import CycleRecord
 
     store = Store.open(tmp_path / "again")
@@ -327,6 +326,6 @@ def test_an_operators_objective_lasts_until_the_file_changes_and_survives_a_rest
         "or_pct": 0.0, "write_status": "verified", "cycle_ms": 1.0,
         "objective_mode": "cooling", "mode_command_id": 7}))
     last = last_decision(store.reader())
-    assert _file_mode_of(store, last) == "heating"
+    assert run_control_mode(store.reader(), last["run_id"]) == "heating"
     assert ManualStage(cfg, store).restore_mode(last, file_mode_then="heating") is None
     store.close()

@@ -94,6 +94,13 @@ async def answered(db: Path, count: int) -> list[dict[str, Any]]:
             await asyncio.sleep(0.1)
 
 
+async def cursor_moved(db: Path) -> None:
+    """Until the publisher has saved a delivered cycle in ``mqtt_cursor``."""
+    async with asyncio.timeout(ANSWER_LIMIT_S):
+        while not query(db, "SELECT cycle FROM mqtt_cursor WHERE cycle > 0"):
+            await asyncio.sleep(0.1)
+
+
 async def wait_messages(sub: Subscriber, predicate: Callable[[list[Message]], bool]
                         ) -> list[Message]:
     return await asyncio.to_thread(sub.wait_for, predicate)
@@ -131,6 +138,7 @@ def test_an_override_over_mqtt_holds_within_one_cycle_and_resume_ends_it(
         await wait_messages(sub, lambda m: bool(states(m)))  # connected and subscribed
         publish(broker, f"{BASE}/cmd/override", '{"hold": "30min", "louver_deg": 54}')
         (override,) = await answered(db, 1)
+        await cursor_moved(db)  # saved every 2 s while messages flow
         seen["status"] = await run_dsfd("status", "--config", str(panel), "--state-dir",
                                         str(state))
         seen["status_json"] = await run_dsfd("status", "--state-dir", str(state), "--json")

@@ -36,7 +36,8 @@ from typing import TYPE_CHECKING, Any
 
 from dsfd.config import PanelConfig
 from dsfd.daemon.logging_setup import get_logger
-from dsfd.integrations.mqtt.link import Backoff, BrokerLink, new_client, reason_text, settings_of
+from dsfd.integrations.mqtt.connection import Connection
+from dsfd.integrations.mqtt.link import Backoff, BrokerLink, new_client, settings_of
 from dsfd.integrations.mqtt.messages import (
     daily_kpis,
     discovery_configs,
@@ -63,55 +64,6 @@ SAVE_EVERY_S = 2.0
 CONNACK_WAIT_S = 10.0
 #: At a clean stop, how long the cycles stored so far may take to go out [s].
 DRAIN_ON_STOP_S = 2.0
-
-
-class _Connection:
-    """One connection attempt: the paho client and what its callbacks report."""
-
-    def __init__(self, client: Client, wake: threading.Event,
-                 receiver: CommandReceiver) -> None:
-        self.client = client
-        self.connack = threading.Event()
-        self.lost = threading.Event()
-        self.refused: str = ""
-        self.lost_reason: str = ""
-        #: The broker's answer to the command subscription: "" granted, else why not.
-        self.subscription: str | None = None
-        self.acks: queue.SimpleQueue[int] = queue.SimpleQueue()
-        client.on_connect = self._on_connect
-        client.on_disconnect = self._on_disconnect
-        client.on_publish = self._on_publish
-        client.on_subscribe = self._on_subscribe
-        client.on_message = self._on_message
-        self._wake = wake
-        self._receiver = receiver
-
-    # paho's network thread calls these (CallbackAPIVersion.VERSION2 signatures)
-    def _on_connect(self, _c: Any, _u: Any, _flags: Any, reason_code: Any, _p: Any) -> None:
-        if reason_code.is_failure:
-            self.refused = reason_text(reason_code)
-        self.connack.set()
-
-    def _on_disconnect(self, _c: Any, _u: Any, _flags: Any, reason_code: Any, _p: Any) -> None:
-        self.lost_reason = reason_text(reason_code)
-        self.lost.set()
-        self.connack.set()
-        self._wake.set()
-
-    def _on_publish(self, _c: Any, _u: Any, mid: int, _reason: Any, _p: Any) -> None:
-        self.acks.put(mid)
-        self._wake.set()
-
-    def _on_subscribe(self, _c: Any, _u: Any, _mid: int, reason_codes: Any, _p: Any) -> None:
-        refused = [reason_text(r) for r in reason_codes if r.is_failure]
-        self.subscription = ", ".join(refused)
-        self._wake.set()
-
-    def _on_message(self, _c: Any, _u: Any, message: Any) -> None:
-        # A command message: queued for the receiver's thread, never handled here; nothing
-        # may escape into paho's network thread (a topic that is not UTF-8, say).
-        with contextlib.suppress(Exception):
-            self._receiver.offer(message.topic, message.payload, message.retain)
 
 
 class MqttPublisher:
@@ -222,12 +174,12 @@ class MqttPublisher:
                 "commands": {"queued": r.queued, "refused": r.refused, "rejected": r.rejected,
                              "dropped": r.dropped}}
 
-    def _connect(self) -> _Connection | None:
+    def _connect(self) -> Connection | None:
         client = new_client(self.link)
         client.will_set(self.availability_topic, "offline", qos=1, retain=True)
         client.max_inflight_messages_set(WINDOW)
         client.max_queued_messages_set(WINDOW + 64)  # + availability, discovery, KPIs
-        conn = _Connection(client, self._wake, self.receiver)
+        conn = Connection(client, self._wake, self.receiver)
         address = self.link.address
         try:
             client.connect(self.link.host, self.link.port, keepalive=self.link.keepalive_s)
@@ -264,7 +216,7 @@ class MqttPublisher:
         st.last_error, st.last_error_utc, st.connected = message, iso_now(), False
         self._save(force=True)
 
-    def _serve(self, conn: _Connection) -> None:
+    def _serve(self, conn: Connection) -> None:
         client = conn.client
         self.backoff.reset()
         self.status.connected = True
@@ -304,7 +256,7 @@ class MqttPublisher:
                          f"{conn.lost_reason or 'closed'} ({len(self._inflight)} state "
                          "message(s) unacknowledged, sent again on reconnect)")
 
-    def _subscribed(self, conn: _Connection) -> None:
+    def _subscribed(self, conn: Connection) -> None:
         """Log the broker's answer to the command subscription once per connection."""
         if conn.subscription is None:
             return
@@ -324,7 +276,7 @@ class MqttPublisher:
         except (ValueError, RuntimeError, OSError) as exc:
             log.debug("MQTT answer not published: %s", exc)
 
-    def _drain(self, conn: _Connection) -> None:
+    def _drain(self, conn: Connection) -> None:
         """At a clean stop: the cycles stored so far go out (bounded by
         :data:`DRAIN_ON_STOP_S`), so the retained state is the last cycle; the rest waits
         in the database for the next start."""
@@ -362,7 +314,7 @@ class MqttPublisher:
             self._sent = p.key
         self._advance()
 
-    def _take_acks(self, conn: _Connection) -> None:
+    def _take_acks(self, conn: Connection) -> None:
         while True:
             try:
                 mid = conn.acks.get_nowait()
@@ -431,7 +383,7 @@ class MqttPublisher:
         self._dirty = False
         self._saved_at = now
 
-    def _close(self, conn: _Connection, *, graceful: bool) -> None:
+    def _close(self, conn: Connection, *, graceful: bool) -> None:
         client = conn.client
         self._live = None
         if graceful and client.is_connected():
