@@ -152,8 +152,10 @@ def test_an_override_over_mqtt_holds_within_one_cycle_and_resume_ends_it(
         assert await d.wait_exit() == 0, d.stderr
         return d
 
-    d = asyncio.run(scenario())
-    sub.stop()
+    try:
+        d = asyncio.run(scenario())
+    finally:
+        sub.stop()
     override, resume = commands(db)
     rows = decisions(db)
     # Filed as the CLI files them, with MQTT as the source, and applied within one cycle.
@@ -369,8 +371,10 @@ def test_home_assistant_select_number_and_button_payloads_command_the_panel(
         assert await d.wait_exit() == 0, d.stderr
         return d
 
-    asyncio.run(scenario())
-    sub.stop()
+    try:
+        asyncio.run(scenario())
+    finally:
+        sub.stop()
     got = sub.messages()
     cfgs, by_cycle = configs(got), states(got)
     rows = commands(db)
