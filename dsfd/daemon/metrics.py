@@ -52,6 +52,8 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from dsfd.storage.schema import HEAT_TERMS
+
 if TYPE_CHECKING:
     from dsfd.daemon.calibration import CalibrationStage
     from dsfd.daemon.loop import CycleOutcome
@@ -119,7 +121,7 @@ class MetricsFile:
         self.heat = gauge("dsfd_room_heat_watts",
                           "Model estimate of the heat into the room over the last step",
                           [*p, "term"])
-        for term in ("q_cv_rd", "q_sol_trans", "q_air", "q_da"):
+        for term in HEAT_TERMS:
             self.heat.labels(panel, term).set(math.nan)
         self.calibration_age.labels(panel).set(math.nan)
         self.write_failures.labels(panel)
@@ -151,7 +153,7 @@ class MetricsFile:
         self.damper.labels(panel).set(pos.or_pct / 100.0)
         self.hold.labels(panel).set(1.0 if out.method == "manual" else 0.0)
         pred = out.estimate.prediction if out.estimate is not None else None
-        for term in ("q_cv_rd", "q_sol_trans", "q_air", "q_da"):
+        for term in HEAT_TERMS:
             self.heat.labels(panel, term).set(math.nan if pred is None else pred.heat_w[term])
 
     def update_mqtt(self, health: Mapping[str, Any]) -> None:

@@ -27,15 +27,17 @@ from typing import Any
 import numpy as np
 
 from dsfd.storage.history import History
+from dsfd.storage.schema import HEAT_TERMS as HEAT_TERM_KEYS
 
 __all__ = ["HEAT_TERMS", "STATES", "Kpis", "PredictionErrors", "compute_kpis", "local_day",
            "prediction_errors", "report_step_s", "zone_name"]
 
 STATES = ("x1", "x2", "x3", "x4", "x5")
-#: Room-side heat terms: key, label (docs/model.md#room-heat).
-HEAT_TERMS: tuple[tuple[str, str], ...] = (
-    ("q_cv_rd", "Q_cv,rd convection + long-wave"), ("q_sol_trans", "Q_sol transmitted solar"),
-    ("q_air", "Q_air ventilation air"), ("q_da", "Q_DA daylight credit"))
+_HEAT_LABELS = {"q_cv_rd": "Q_cv,rd convection + long-wave",
+                "q_sol_trans": "Q_sol transmitted solar", "q_air": "Q_air ventilation air",
+                "q_da": "Q_DA daylight credit"}
+#: Room-side heat terms: key, label (docs/model.md#room-heat), in the model table's order.
+HEAT_TERMS: tuple[tuple[str, str], ...] = tuple((k, _HEAT_LABELS[k]) for k in HEAT_TERM_KEYS)
 J_PER_KWH = 3.6e6
 #: A step counts as one sampling interval within this relative tolerance (as in validate).
 SPACING_TOLERANCE = 0.02

@@ -52,9 +52,10 @@ from typing import Any
 import numpy as np
 
 from dsfd.config import PanelConfig
+from dsfd.config.panel import REGIME_NAMES
 from dsfd.daemon.commands import OBJECTIVE_MODES
-from dsfd.daemon.summary import REGIME_NAMES
 from dsfd.signals import SENSOR_NAMES
+from dsfd.storage.schema import HEAT_TERMS
 
 __all__ = [
     "HEAT_TERMS",
@@ -67,8 +68,6 @@ __all__ = [
     "state_message",
 ]
 
-#: Room-side heat terms of the model (table ``model``, issue 21) [W].
-HEAT_TERMS: tuple[str, ...] = ("q_sol_trans", "q_cv_rd", "q_air", "q_da")
 GOOD = "good"
 
 

@@ -24,7 +24,7 @@ from typing import Any
 
 from dsfd.integrations.mqtt.messages import day_bounds_s
 from dsfd.report.kpis import J_PER_KWH
-from dsfd.storage.timeseries import BUSY_TIMEOUT_MS, iso_now
+from dsfd.storage.schema import BUSY_TIMEOUT_MS, HEAT_TERMS, iso_now
 
 __all__ = ["Key", "Outbox", "PendingCycle", "Status"]
 
@@ -38,8 +38,7 @@ _DECISION_COLUMNS = ("run_id, cycle, slot, time_s, time_utc, method, fallback_re
 #: What the model made of a cycle (table ``model``, issue 21): the state estimate and the
 #: room-side heat of the step that ended, with the names the state message uses.
 MODEL_FIELDS: tuple[str, ...] = (*(f"est_x{i}_c" for i in range(1, 7)),
-                                 *(f"{q}_w" for q in ("q_sol_trans", "q_cv_rd", "q_air",
-                                                      "q_da")))
+                                 *(f"{q}_w" for q in HEAT_TERMS))
 _STATE_QUERY = (
     "SELECT " + ", ".join(f"d.{c.strip()}" for c in _DECISION_COLUMNS.split(","))
     + ", " + ", ".join(f"m.{c}" for c in MODEL_FIELDS)
@@ -211,11 +210,10 @@ class Outbox:
         steps cover. A cycle's ``model`` row holds the step-mean heat [W] of the step that
         ended at it; the step belongs to the day of its midpoint (as in ``dsfd report``)."""
         start, end = day_bounds_s(day, utc_offset_h)
-        terms = ("q_sol_trans", "q_cv_rd", "q_air", "q_da")
         row = self.conn.execute(
-            f"SELECT {', '.join(f'SUM({q}_w)' for q in terms)}, COUNT(q_cv_rd_w) FROM model "
+            f"SELECT {', '.join(f'SUM({q}_w)' for q in HEAT_TERMS)}, COUNT(q_cv_rd_w) FROM model "
             "WHERE time_s - ? >= ? AND time_s - ? < ?",
             (step_s / 2, start, step_s / 2, end)).fetchone()
         kwh = {q: None if v is None else float(v) * step_s / J_PER_KWH
-               for q, v in zip(terms, row[:-1], strict=True)}
+               for q, v in zip(HEAT_TERMS, row[:-1], strict=True)}
         return kwh, int(row[-1]) * step_s / 3600.0
