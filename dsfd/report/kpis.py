@@ -29,8 +29,8 @@ import numpy as np
 from dsfd.storage.history import History
 from dsfd.storage.schema import HEAT_TERMS as HEAT_TERM_KEYS
 
-__all__ = ["HEAT_TERMS", "STATES", "Kpis", "PredictionErrors", "compute_kpis", "local_day",
-           "prediction_errors", "report_step_s", "zone_name"]
+__all__ = ["HEAT_TERMS", "STATES", "Kpis", "PredictionErrors", "compute_kpis", "local_dates",
+           "local_day", "prediction_errors", "report_step_s", "zone_name"]
 
 STATES = ("x1", "x2", "x3", "x4", "x5")
 _HEAT_LABELS = {"q_cv_rd": "Q_cv,rd convection + long-wave",
@@ -60,11 +60,16 @@ def zone_name(utc_offset_h: float) -> str:
     return f"UTC{sign}{h:02d}:{m:02d}"
 
 
+def local_dates(time_s: np.ndarray | float, utc_offset_h: float) -> np.ndarray:
+    """Local standard calendar day (``datetime64[D]``) of each UTC time [s]; a scalar time
+    gives a 0-d array (``.item()`` is its :class:`datetime.date`)."""
+    t = np.asarray(time_s, float) + utc_offset_h * 3600.0
+    return np.floor(t / 86400.0).astype("int64").astype("datetime64[D]")
+
+
 def local_day(time_s: np.ndarray, utc_offset_h: float) -> np.ndarray:
     """Local standard date (``YYYY-MM-DD``) of each UTC time [s]."""
-    t = np.asarray(time_s, float) + utc_offset_h * 3600.0
-    days = np.floor(t / 86400.0).astype("int64").astype("datetime64[D]")
-    return days.astype(str)
+    return local_dates(time_s, utc_offset_h).astype(str)
 
 
 def _step_s(history: History, config: Mapping[str, Any] | None) -> float:

@@ -54,6 +54,7 @@ import numpy as np
 from dsfd.config import PanelConfig
 from dsfd.config.panel import REGIME_NAMES
 from dsfd.daemon.commands import OBJECTIVE_MODES
+from dsfd.report.kpis import local_dates
 from dsfd.signals import SENSOR_NAMES
 from dsfd.storage.schema import HEAT_TERMS
 
@@ -192,8 +193,9 @@ def _float(value: Any) -> float | None:
 
 # --------------------------------------------------------------------------- KPIs
 def local_day(time_s: float, utc_offset_h: float) -> date:
-    """The panel's local (standard time) calendar day of a UTC time [s]."""
-    return datetime.fromtimestamp(time_s + utc_offset_h * 3600.0, UTC).date()
+    """The panel's local (standard time) calendar day of a UTC time [s] (as ``dsfd report``
+    counts days: :func:`dsfd.report.kpis.local_dates`)."""
+    return local_dates(time_s, utc_offset_h).item()
 
 
 def day_bounds_s(day: date, utc_offset_h: float) -> tuple[float, float]:
