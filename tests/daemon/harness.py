@@ -22,6 +22,8 @@ from typing import Any
 
 import yaml
 
+from dsfd.integrations.mqtt.broker import free_port as free_port  # for the HIL tests
+
 ROOT = Path(__file__).resolve().parents[2]
 SUWON = ROOT / "config" / "panels" / "suwon-south.yaml"
 #: Start of the simulated clock in the HIL runs: 08:30 local time in Suwon on the clear
@@ -101,12 +103,6 @@ class UntouchedDevice:
             return False
         finally:
             self._sock.close()
-
-
-def free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def dsfd_command(*args: str) -> list[str]:

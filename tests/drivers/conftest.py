@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import asyncio
-import socket
 from collections.abc import Callable, Coroutine
 from typing import Any, TypeVar
 
 import pytest
+
+from dsfd.integrations.mqtt.broker import free_port
 
 T = TypeVar("T")
 
@@ -47,16 +48,10 @@ def run() -> Callable[[Coroutine[Any, Any, T]], T]:
     return _run
 
 
-def _free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
 @pytest.fixture
 def tcp_port() -> int:
     """A TCP port on 127.0.0.1 that was free a moment ago."""
-    return _free_port()
+    return free_port()
 
 
 def _build_devices(entries: list[dict[str, Any]]) -> Any:
