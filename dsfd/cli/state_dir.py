@@ -8,7 +8,6 @@
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -40,12 +39,9 @@ def add_state_arguments(p: argparse.ArgumentParser) -> None:
 
 def state_dir_of(config_path: Path, cfg: PanelConfig) -> Path:
     """The state directory ``dsfd run --config config_path`` uses (see module docstring)."""
-    if cfg.daemon.state_directory:
-        return Path(cfg.daemon.state_directory)
-    env = os.environ.get("STATE_DIRECTORY", "")
-    if env:
-        return Path(env.split(":")[0])
-    return SYSTEMD_STATE_ROOT / config_path.stem
+    from dsfd.daemon.startup import configured_state_dir
+
+    return configured_state_dir(cfg) or SYSTEMD_STATE_ROOT / config_path.stem
 
 
 def history_from_args(args: argparse.Namespace, command: str

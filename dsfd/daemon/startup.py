@@ -16,7 +16,7 @@ from dsfd.signals import ACTUATOR_NAMES
 if TYPE_CHECKING:
     from dsfd.daemon.runner import RunOptions
 
-__all__ = ["load_for_run", "resolve_state_dir", "runtime_problems"]
+__all__ = ["configured_state_dir", "load_for_run", "resolve_state_dir", "runtime_problems"]
 
 #: Read and write budgets of a panel without a devices: section (the simulated plant): the
 #: defaults of the devices: section.
@@ -78,15 +78,23 @@ def load_for_run(path: Path, *, simulated_plant: bool, dry_run: bool) -> PanelCo
     return cfg
 
 
+def configured_state_dir(cfg: PanelConfig) -> Path | None:
+    """The panel's ``daemon.state_directory``, else systemd's ``$STATE_DIRECTORY``, else None."""
+    if cfg.daemon.state_directory:
+        return Path(cfg.daemon.state_directory)
+    env = os.environ.get("STATE_DIRECTORY", "")
+    if env:
+        return Path(env.split(":")[0])  # systemd lists several, colon-separated
+    return None
+
+
 def resolve_state_dir(opts: RunOptions, cfg: PanelConfig) -> tuple[Path, bool]:
     """The state directory and whether it is a temporary one (simulated dry runs only)."""
     if opts.state_dir is not None:
         return opts.state_dir, False
-    if cfg.daemon.state_directory:
-        return Path(cfg.daemon.state_directory), False
-    env = os.environ.get("STATE_DIRECTORY", "")
-    if env:
-        return Path(env.split(":")[0]), False  # systemd lists several, colon-separated
+    configured = configured_state_dir(cfg)
+    if configured is not None:
+        return configured, False
     if opts.simulated_plant:
         return Path(tempfile.mkdtemp(prefix=f"dsfd-{cfg.panel.id}-")), True
     raise ConfigError([ConfigIssue(

@@ -69,3 +69,32 @@ def test_status_text_says_who_holds_the_panel_and_until_when() -> None:
     assert "mqtt:        10.0.4.2:1883 dsfd/p: not connected; 12 waiting, delivered up to " \
         "cycle 140 of run 3 (2025-01-02T08:19:00Z), 340 in all" in text
     assert "last error 2025-01-02T08:20:00Z: not authorised" in text
+
+
+def test_dsfd_run_finds_the_same_state_directory_and_names_the_key_without_one(
+        suwon, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import dataclasses
+    import shutil
+
+    from dsfd.config import ConfigError
+    from dsfd.daemon.runner import RunOptions
+    from dsfd.daemon.startup import resolve_state_dir
+
+    monkeypatch.delenv("STATE_DIRECTORY", raising=False)
+    hardware = RunOptions(config_path=Path("/etc/dsfd/suwon-south.yaml"))
+    with pytest.raises(ConfigError, match=r"daemon\.state_directory") as err:
+        resolve_state_dir(hardware, suwon)  # nothing says where: refused before anything
+    assert "StateDirectory=" in str(err.value) and "--state-dir" in str(err.value)
+    sim = dataclasses.replace(hardware, plant="sim")
+    temporary, is_temporary = resolve_state_dir(sim, suwon)
+    try:
+        assert is_temporary and temporary.is_dir() and "suwon-south" in temporary.name
+    finally:
+        shutil.rmtree(temporary)
+    monkeypatch.setenv("STATE_DIRECTORY", "/srv/a:/srv/b")
+    assert resolve_state_dir(hardware, suwon) == (Path("/srv/a"), False)
+    configured = dataclasses.replace(
+        suwon, daemon=dataclasses.replace(suwon.daemon, state_directory=str(tmp_path)))
+    assert resolve_state_dir(hardware, configured) == (tmp_path, False)
+    told = dataclasses.replace(hardware, state_dir=Path("/x"))
+    assert resolve_state_dir(told, configured) == (Path("/x"), False)
