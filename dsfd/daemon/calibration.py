@@ -40,8 +40,8 @@ from dsfd.measured import CONTROL_COLUMNS, KNOWN_COLUMNS, MeasuredData, Measured
 from dsfd.physics.model import LumpedModel
 from dsfd.storage.calibration_file import (
     CalibrationFileError,
-    load_state,
     move_aside,
+    resume_state,
     save_state,
 )
 
@@ -95,19 +95,16 @@ class CalibrationStage:
         """The state file, else (moved aside if unusable) the database history, else priors;
         sets :attr:`resume_message` and :attr:`origin`."""
         panel = self.cfg.panel.id
-        if not self.path.exists():
-            self.resume_message = (f"no calibration state at {self.path}: starting from the "
-                                   "panel priors")
-            return CalibrationState.initial(panel, self.space)
         try:
-            state = load_state(self.path, space=self.space, panel_id=panel)
+            saved, self.resume_message = resume_state(self.path, space=self.space,
+                                                      panel_id=panel)
         except CalibrationFileError as exc:
             why = str(exc)
         else:
+            if saved is None:  # no file: the priors
+                return CalibrationState.initial(panel, self.space)
             self.origin = "resumed"
-            self.resume_message = (f"resumed calibration state from {self.path} "
-                                   f"({state.updates} updates)")
-            return state
+            return saved
         try:
             kept = f"moved aside to {move_aside(self.path).name}"
         except OSError as err:

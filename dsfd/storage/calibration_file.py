@@ -4,6 +4,7 @@
   self-calibration (:class:`dsfd.estimation.state.CalibrationState`). Written atomically —
   temporary file in the same directory, flush + fsync, ``os.replace``, fsync of the
   directory — so a crash at any instant leaves the old or the new file, never a torn one.
+  :func:`resume_state` reads it if there is one (the daemon's calibration stage), and
   :func:`load_state_or_prior` falls back to the panel priors, with a message saying why,
   when the file is missing or unusable; the daemon moves an unusable file aside
   (:func:`move_aside`, ``calibration.json.corrupt.<time>``) before it writes a new one.
@@ -67,6 +68,22 @@ def load_state(path: str | Path, *, space: ParameterSpace, panel_id: str) -> Cal
         raise CalibrationFileError(f"{path}: {exc}") from None
 
 
+def resume_state(path: str | Path, *, space: ParameterSpace, panel_id: str
+                 ) -> tuple[CalibrationState | None, str]:
+    """The saved state and "resumed ...", or None and why there is none (no file).
+
+    Raises
+    ------
+    CalibrationFileError
+        The file exists but cannot be used (:func:`load_state`).
+    """
+    path = Path(path)
+    if not path.exists():
+        return None, f"no calibration state at {path}: starting from the panel priors"
+    state = load_state(path, space=space, panel_id=panel_id)
+    return state, f"resumed calibration state from {path} ({state.updates} updates)"
+
+
 def load_state_or_prior(path: str | Path, *, space: ParameterSpace,
                         panel_id: str) -> tuple[CalibrationState, str]:
     """The saved state, or the panel priors with a message saying why.
@@ -77,16 +94,12 @@ def load_state_or_prior(path: str | Path, *, space: ParameterSpace,
     message : str
         "resumed ..." or why the priors are used (missing or unusable file).
     """
-    path = Path(path)
-    if not path.exists():
-        return (CalibrationState.initial(panel_id, space),
-                f"no calibration state at {path}: starting from the panel priors")
     try:
-        state = load_state(path, space=space, panel_id=panel_id)
+        state, message = resume_state(path, space=space, panel_id=panel_id)
     except CalibrationFileError as exc:
         return (CalibrationState.initial(panel_id, space),
                 f"calibration state unusable, starting from the panel priors: {exc}")
-    return state, f"resumed calibration state from {path} ({state.updates} updates)"
+    return state or CalibrationState.initial(panel_id, space), message
 
 
 def move_aside(path: str | Path) -> Path:
