@@ -95,11 +95,11 @@ def open_database(state: Path) -> sqlite3.Connection:
         raise OperatorError(f"no database in {state}: no daemon has run with this state "
                             "directory (wrong --config or --state-dir?)", EXIT_FAILURE) from None
     except (PermissionError, sqlite3.Error) as exc:
-        raise OperatorError(f"cannot read {state / DB_NAME}: {exc}: {_access_hint()}",
+        raise OperatorError(f"cannot read {state / DB_NAME}: {exc}: {access_hint()}",
                             EXIT_NO_ACCESS) from None
 
 
-def _access_hint() -> str:
+def access_hint() -> str:
     return ("run it with sudo, or give your group access to the state directory (README, "
             "'Operator commands')")
 
@@ -214,7 +214,7 @@ def _queue(state: Path, request: dict[str, Any]) -> int:
     try:
         pid = lock_holder(state)
     except PermissionError as exc:
-        raise OperatorError(f"{exc}: {_access_hint()}", EXIT_NO_ACCESS) from None
+        raise OperatorError(f"{exc}: {access_hint()}", EXIT_NO_ACCESS) from None
     if pid is None:
         raise OperatorError(f"no daemon is running on {state}; nothing was queued",
                             EXIT_NOT_RUNNING)
@@ -223,7 +223,7 @@ def _queue(state: Path, request: dict[str, Any]) -> int:
         return submit(state / DB_NAME, kind=request["command"], args=args, source="cli",
                       requester=requester())
     except sqlite3.OperationalError as exc:
-        raise OperatorError(f"cannot write {state / DB_NAME}: {exc}: {_access_hint()}",
+        raise OperatorError(f"cannot write {state / DB_NAME}: {exc}: {access_hint()}",
                             EXIT_NO_ACCESS) from None
 
 

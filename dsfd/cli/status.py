@@ -28,11 +28,12 @@ from dsfd.cli.operator import (
     EXIT_NOT_RUNNING,
     EXIT_OK,
     OperatorError,
-    _access_hint,
+    access_hint,
     add_target,
     load_target,
     open_database,
 )
+from dsfd.storage.queries import first_row
 
 _SET_BY = {"mpc": "optimiser (mpc)", "paper-sqp": "optimiser (paper-sqp)",
            "rule": "rule-based baseline", "safe": "safe state (faults)", "manual": "manual hold"}
@@ -68,7 +69,7 @@ def gather(state: Path, cfg: Any | None, *, now_s: float | None = None) -> dict[
     try:
         pid = lock_holder(state)
     except PermissionError as exc:
-        raise OperatorError(f"{exc}: {_access_hint()}", EXIT_NO_ACCESS) from None
+        raise OperatorError(f"{exc}: {access_hint()}", EXIT_NO_ACCESS) from None
     conn = open_database(state)
     try:
         return _gather(conn, state, cfg, now, pid, state / LOCK_NAME)
@@ -83,8 +84,9 @@ def _gather(conn: sqlite3.Connection, state: Path, cfg: Any | None, now: float,
             pid: int | None, lock: Path) -> dict[str, Any]:
     from dsfd.storage.queries import columns, last_decision
 
-    run = _row(conn, "SELECT run_id, panel, mode, started_utc, pid, version, config_path, "
-               "ended_utc, end_reason FROM runs ORDER BY run_id DESC LIMIT 1")
+    tables = _tables(conn)
+    run = first_row(conn, "SELECT run_id, panel, mode, started_utc, pid, version, "
+                    "config_path, ended_utc, end_reason FROM runs ORDER BY run_id DESC LIMIT 1")
     last = last_decision(conn)
     info: dict[str, Any] = {
         "panel": (run or {}).get("panel") or (cfg.panel.id if cfg else None),
@@ -96,20 +98,18 @@ def _gather(conn: sqlite3.Connection, state: Path, cfg: Any | None, now: float,
         "objective": None if last is None else _objective(conn, last),
         "flagged": [] if last is None else _flagged(conn, last),
         "calibration": _calibration(conn, cfg, (run or {}).get("panel"), now),
-        "commands": _commands(conn) if "commands" in _tables(conn) else None,
-        "mqtt": _mqtt(conn, running=pid is not None) if "mqtt_cursor" in _tables(conn)
-        else [],
+        "commands": _commands(conn) if "commands" in tables else None,
+        "mqtt": _mqtt(conn, running=pid is not None) if "mqtt_cursor" in tables else [],
     }
     if last is not None and "hold_source" not in columns(conn, "decisions"):
         info["note"] = "database of an older dsfd (schema 1): no hold information"
     return info
 
 
-def _row(conn: sqlite3.Connection, sql: str, *params: Any) -> dict[str, Any] | None:
-    cur = conn.execute(sql, params)
-    row = cur.fetchone()
-    return None if row is None else dict(zip([d[0] for d in cur.description], row,
-                                             strict=True))
+def _requester(conn: sqlite3.Connection, command_id: int) -> dict[str, Any] | None:
+    """Source and requester of an operator command (its ``commands`` row)."""
+    return first_row(conn, "SELECT source, requester FROM commands WHERE command_id = ?",
+                     command_id)
 
 
 def _tables(conn: sqlite3.Connection) -> set[str]:
@@ -155,8 +155,7 @@ def _hold(conn: sqlite3.Connection, d: dict[str, Any], now: float) -> dict[str, 
     if expires is not None and _age(d["time_s"], now) is not None:
         out["remaining_s"] = round(expires - now, 1)
     if out["command_id"] is not None:
-        cmd = _row(conn, "SELECT source, requester FROM commands WHERE command_id = ?",
-                   out["command_id"])
+        cmd = _requester(conn, out["command_id"])
         if cmd:
             out["requester"] = f"{cmd['source']} {cmd['requester']}"
     return out
@@ -172,8 +171,7 @@ def _objective(conn: sqlite3.Connection, d: dict[str, Any]) -> dict[str, Any] | 
         "now": None if heating is None else ("heating" if heating else "cooling"),
         "set_by": "panel file (control.mode)"}
     if out["command_id"] is not None:
-        cmd = _row(conn, "SELECT source, requester FROM commands WHERE command_id = ?",
-                   out["command_id"])
+        cmd = _requester(conn, out["command_id"])
         who = f" by {cmd['source']} {cmd['requester']}" if cmd else ""
         out["set_by"] = f"operator command #{out['command_id']}{who}"
     return out
@@ -208,8 +206,8 @@ def _calibration(conn: sqlite3.Connection, cfg: Any | None, panel: str | None, n
 def _commands(conn: sqlite3.Connection) -> dict[str, Any]:
     pending = conn.execute("SELECT COUNT(*) FROM commands WHERE status = 'pending'"
                            ).fetchone()[0]
-    last = _row(conn, "SELECT command_id, kind, args, source, requester, status, reason, "
-                "cycle, handled_utc FROM commands ORDER BY command_id DESC LIMIT 1")
+    last = first_row(conn, "SELECT command_id, kind, args, source, requester, status, "
+                     "reason, cycle, handled_utc FROM commands ORDER BY command_id DESC LIMIT 1")
     return {"pending": pending, "last": last}
 
 

@@ -29,6 +29,7 @@ from dsfd.measured import (
     MeasuredData,
     iso_utc,
 )
+from dsfd.storage.queries import columns
 from dsfd.storage.timeseries import DB_NAME, MODEL_COLUMNS
 
 __all__ = ["History", "HistoryError", "ParameterHistory", "RunInfo", "measured_from_history",
@@ -159,12 +160,8 @@ def _connect(state_dir: Path) -> sqlite3.Connection:
     return conn
 
 
-def _columns(conn: sqlite3.Connection, table: str) -> set[str]:
-    return {row[1] for row in conn.execute(f"PRAGMA table_info({table})")}
-
-
 def _runs(conn: sqlite3.Connection) -> dict[int, RunInfo]:
-    has_config = "config_json" in _columns(conn, "runs")
+    has_config = "config_json" in columns(conn, "runs")
     sql = ("SELECT run_id, panel, mode, started_utc, ended_utc, end_reason, version, "
            f"config_path, {'config_json' if has_config else 'NULL'} FROM runs ORDER BY run_id")
     out = {}
@@ -269,7 +266,7 @@ def _read(conn: sqlite3.Connection, state_dir: Path, since_s: float | None,
         quality[signal][i] = flag
 
     model = {name: np.full(n, np.nan) for name, _ in MODEL_COLUMNS}
-    present = _columns(conn, "model")
+    present = columns(conn, "model")
     if present:
         names = [c for c, _ in MODEL_COLUMNS if c in present]
         for run, cycle, *vals in conn.execute(

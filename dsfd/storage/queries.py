@@ -16,7 +16,7 @@ from typing import Any
 
 from dsfd.config.panel import PARAMETER_NAMES
 
-__all__ = ["columns", "last_decision", "open_read_only", "parameter_history",
+__all__ = ["columns", "first_row", "last_decision", "open_read_only", "parameter_history",
            "run_control_mode"]
 
 
@@ -50,13 +50,17 @@ def columns(conn: sqlite3.Connection, table: str) -> set[str]:
     return {row[1] for row in conn.execute(f"PRAGMA table_info({table})")}
 
 
+def first_row(conn: sqlite3.Connection, sql: str, *params: Any) -> dict[str, Any] | None:
+    """The first row of a query as a mapping by column name, None if there is none."""
+    cur = conn.execute(sql, params)
+    row = cur.fetchone()
+    return None if row is None else dict(zip([d[0] for d in cur.description], row,
+                                             strict=True))
+
+
 def last_decision(conn: sqlite3.Connection) -> dict[str, Any] | None:
     """The newest stored decision (any run), as a mapping by column."""
-    cur = conn.execute("SELECT * FROM decisions ORDER BY run_id DESC, cycle DESC LIMIT 1")
-    row = cur.fetchone()
-    if row is None:
-        return None
-    return dict(zip([d[0] for d in cur.description], row, strict=True))
+    return first_row(conn, "SELECT * FROM decisions ORDER BY run_id DESC, cycle DESC LIMIT 1")
 
 
 def run_control_mode(conn: sqlite3.Connection, run_id: int) -> str | None:
