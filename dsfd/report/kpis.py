@@ -72,7 +72,8 @@ def local_day(time_s: np.ndarray, utc_offset_h: float) -> np.ndarray:
     return local_dates(time_s, utc_offset_h).astype(str)
 
 
-def _step_s(history: History, config: Mapping[str, Any] | None) -> float:
+def report_step_s(history: History, config: Mapping[str, Any] | None) -> float:
+    """The cycle period [s]: the configuration's model step, else the median spacing."""
     step = _get(config, "model", "step_s")
     if step:
         return float(step)
@@ -288,15 +289,10 @@ def _summary_errors(err: PredictionErrors) -> dict[str, dict[str, float]]:
     return out
 
 
-def report_step_s(history: History, config: Mapping[str, Any] | None) -> float:
-    """The cycle period [s]: the configuration's model step, else the median spacing."""
-    return _step_s(history, config)
-
-
 def compute_kpis(history: History, config: Mapping[str, Any] | None,
                  errors: PredictionErrors | None = None) -> Kpis:
     """Per local day and in total (see the module docstring for the conventions)."""
-    step_s = _step_s(history, config)
+    step_s = report_step_s(history, config)
     lon = _get(config, "site", "longitude_deg")
     offset = _get(config, "site", "utc_offset_h",
                   default=round(lon / 15.0) if lon is not None else 0.0)

@@ -121,9 +121,7 @@ def resolve_link(cfg: PanelConfig, *, config_path: Path) -> BrokerLink:
     Raises :class:`ConfigError` naming ``mqtt.password_file`` or ``mqtt.tls.*`` when a file is
     missing or unreadable.
     """
-    mq = cfg.mqtt
-    if mq is None:
-        raise ValueError("the panel has no mqtt: section")
+    mq = settings_of(cfg)
     config_dir = config_path.resolve().parent
     issues: list[ConfigIssue] = []
     password = None
