@@ -43,6 +43,8 @@ REGIME_NAMES: dict[int, str] = {
     7: "supply out→EB→IT→room", 8: "supply out→ET→IB→room",
     9: "all dampers open", 10: "closed",
 }
+#: The regime with every damper closed (no opening may be commanded in it).
+CLOSED_REGIME = 10
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -31,7 +31,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from dsfd.config.panel import REGIME_OPENINGS, PanelConfig
+from dsfd.config.panel import CLOSED_REGIME, REGIME_OPENINGS, PanelConfig
 
 __all__ = [
     "COMMAND_KINDS",
@@ -52,7 +52,6 @@ OBJECTIVE_MODES = ("heating", "cooling", "auto")
 #: Shortest and longest hold an operator may ask for [s].
 MIN_HOLD_S = 60.0
 MAX_HOLD_S = 7 * 86400.0
-_CLOSED = 10
 _DURATION = re.compile(r"(\d+(?:\.\d+)?)\s*(d|h|min|m|s)", re.IGNORECASE)
 _SECONDS = {"d": 86400.0, "h": 3600.0, "min": 60.0, "m": 60.0, "s": 1.0}
 
@@ -147,7 +146,7 @@ def validate_command(cfg: PanelConfig, request: Mapping[str, Any]) -> OperatorCo
     afr = _regime(cfg, request["regime"]) if request.get("regime") is not None else None
     or_pct = _opening(cfg, request["or_pct"], afr) if request.get("or_pct") is not None \
         else None
-    if afr == _CLOSED and or_pct is None:
+    if afr == CLOSED_REGIME and or_pct is None:
         or_pct = 0.0
     return OperatorCommand("override", hold_s=hold_s, phi_deg=phi, afr=afr, or_pct=or_pct)
 
@@ -216,7 +215,7 @@ def _opening(cfg: PanelConfig, value: Any, afr: int | None) -> float:
     if abs(steps - round(steps)) > 1e-6:
         raise CommandError("or_pct", value, f"not on the damper's {s.or_step_pct:g} % steps "
                            "(safety.or_step_pct)")
-    if afr == _CLOSED and or_pct != 0.0:
+    if afr == CLOSED_REGIME and or_pct != 0.0:
         raise CommandError("or_pct", value, "regime 10 closes every damper: use 0 or leave "
                            "it out")
     return or_pct

@@ -27,7 +27,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
-from dsfd.config.panel import PanelConfig
+from dsfd.config.panel import CLOSED_REGIME, PanelConfig
 from dsfd.daemon.commands import CommandError, OperatorCommand
 from dsfd.drivers.base import Command
 from dsfd.measured import iso_utc
@@ -36,7 +36,6 @@ __all__ = ["HOLD_SOURCES", "Hold", "HoldTracker", "HoldUpdate", "PendingCommand"
            "hold_seconds", "moved_actuators"]
 
 HOLD_SOURCES = ("detected", "input", "operator")
-_CLOSED = 10
 
 
 @dataclass(frozen=True)
@@ -269,7 +268,7 @@ def _merge(base: Command | None, cmd: OperatorCommand) -> Command | None:
         raise ValueError("actuator position unknown (no read-back): give louver_deg, "
                          "regime and or_pct")
     values = {**(base.as_dict() if base is not None else {}), **given}
-    if "afr" in given and values["afr"] == _CLOSED and "or_pct" not in given:
+    if "afr" in given and values["afr"] == CLOSED_REGIME and "or_pct" not in given:
         values["or_pct"] = 0.0
     return Command(phi_deg=values["phi_deg"], afr=int(values["afr"]), or_pct=values["or_pct"])
 

@@ -34,13 +34,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from dsfd.config.panel import REGIME_OPENINGS, PanelConfig
+from dsfd.config.panel import CLOSED_REGIME, REGIME_OPENINGS, PanelConfig
 from dsfd.daemon.hold import Hold
 from dsfd.drivers.base import Command
 
 __all__ = ["CLOSED", "STAGES", "SafetyContext", "SafetyPipeline", "SafetyResult", "TraceEntry"]
 
-CLOSED = 10
+CLOSED = CLOSED_REGIME
 #: The stages in priority order (the order of the trace).
 STAGES = ("wind", "hold", "faults", "limits", "quantisation", "rate", "regimes")
 _EXTERIOR = frozenset({"exterior_bottom", "exterior_top"})
