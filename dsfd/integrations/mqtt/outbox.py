@@ -123,8 +123,11 @@ class Outbox:
         row = self.conn.execute("SELECT MAX(time_s) FROM decisions").fetchone()
         return None if row[0] is None else float(row[0])
 
-    def oldest_allowed_s(self, max_age_s: float) -> float | None:
-        newest = self.newest_time_s()
+    def oldest_allowed_s(self, max_age_s: float, *, newest_s: float | None = None
+                         ) -> float | None:
+        """The oldest cycle time still sent: ``max_age_s`` before the newest stored cycle
+        (``newest_s`` if the caller just read it, else read now); None if none is stored."""
+        newest = self.newest_time_s() if newest_s is None else newest_s
         return None if newest is None else newest - max_age_s
 
     def backlog(self, after: Key, *, max_age_s: float) -> int:
@@ -136,14 +139,15 @@ class Outbox:
             "SELECT COUNT(*) FROM decisions WHERE (run_id, cycle) > (?, ?) AND time_s >= ?",
             (*after, oldest)).fetchone()[0])
 
-    def pending(self, after: Key, *, limit: int, max_age_s: float
-                ) -> tuple[list[PendingCycle], int, Key | None]:
-        """Up to ``limit`` cycles after ``after`` in stored order, young enough to send.
+    def pending(self, after: Key, *, limit: int, max_age_s: float,
+                newest_s: float | None = None) -> tuple[list[PendingCycle], int, Key | None]:
+        """Up to ``limit`` cycles after ``after`` in stored order, young enough to send
+        (``newest_s``: :meth:`newest_time_s` if the caller just read it).
 
         Returns the cycles, how many older ones were passed over, and the position just
         before the first returned cycle when some were passed over (else None).
         """
-        oldest = self.oldest_allowed_s(max_age_s)
+        oldest = self.oldest_allowed_s(max_age_s, newest_s=newest_s)
         if oldest is None or limit <= 0:
             return [], 0, None
         rows = self.conn.execute(_STATE_QUERY, (*after, oldest, limit)).fetchall()

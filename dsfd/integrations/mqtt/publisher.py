@@ -244,8 +244,10 @@ class MqttPublisher:
             self._take_acks(conn)
             if conn.lost.is_set():
                 break
-            self._send_more(client)
-            self._publish_kpi(client)
+            # One look at the newest stored cycle serves the backlog's age limit and the KPIs.
+            newest = self.outbox.newest_time_s() if self.outbox is not None else None
+            self._send_more(client, newest_s=newest)
+            self._publish_kpi(client, newest)
             self._save()
             self._subscribed(conn)
         if self._stop.is_set() and not conn.lost.is_set():
@@ -289,14 +291,14 @@ class MqttPublisher:
             self._wake.wait(0.05)
             self._wake.clear()
 
-    def _send_more(self, client: Client) -> None:
+    def _send_more(self, client: Client, *, newest_s: float | None = None) -> None:
         import paho.mqtt.client as mqtt
 
         room = WINDOW - len(self._inflight)
         if room <= 0 or self.outbox is None:
             return
-        cycles, skipped, before_first = self.outbox.pending(self._sent, limit=room,
-                                                            max_age_s=self.max_age_s)
+        cycles, skipped, before_first = self.outbox.pending(
+            self._sent, limit=room, max_age_s=self.max_age_s, newest_s=newest_s)
         if skipped and before_first is not None:
             self.status.expired += skipped
             log.warning("%d stored cycle(s) older than mqtt.backlog_max_age_h passed over",
@@ -341,12 +343,10 @@ class MqttPublisher:
             self.acked = max(self.acked, key)
             self._dirty = True
 
-    def _publish_kpi(self, client: Client) -> None:
-        """The last completed local day's KPIs, once per day and once per connection."""
-        if self.outbox is None:
-            return
-        newest = self.outbox.newest_time_s()
-        if newest is None:
+    def _publish_kpi(self, client: Client, newest: float | None) -> None:
+        """The last completed local day's KPIs, once per day and once per connection
+        (``newest``: the time of the newest stored cycle)."""
+        if self.outbox is None or newest is None:
             return
         offset = self.cfg.site.utc_offset_h
         day = local_day(newest, offset) - timedelta(days=1)
