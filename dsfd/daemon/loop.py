@@ -5,7 +5,8 @@ The loop only moves data between the core functions (observer, calibrator, optim
 baseline, safety pipeline) and the two edges (drivers, store), timing every stage:
 
 * **read** — all drivers concurrently, plus the actuator read-back, under the devices' read
-  budget; a driver fault is a bad reading, never an exception out of here;
+  budget; a driver fault is a bad reading, never an exception out of here
+  (:mod:`dsfd.daemon.device_io`);
 * **quality** — :class:`~dsfd.daemon.quality.QualityChecker` flags what cannot be used;
 * **estimate** — measured weather → forcing (:mod:`dsfd.daemon.weather`) and the state
   estimate (:mod:`dsfd.daemon.observer`);
@@ -15,7 +16,8 @@ baseline, safety pipeline) and the two edges (drivers, store), timing every stag
   even that lacks its inputs (outdoor air, irradiance), nothing is proposed and the safety
   pipeline commands the safe state;
 * **safety** — :class:`~dsfd.daemon.safety.SafetyPipeline`, with the decision trace;
-* **write** — under the devices' write budget, verified by read-back (unless a dry run);
+* **write** — under the devices' write budget, verified by read-back (unless a dry run;
+  :mod:`dsfd.daemon.device_io`);
 * **predict** — the states at the end of the horizon with the applied position held (for
   the report's multi-step prediction error; the one-step prediction and the room-side heat
   of the step that ended come free with the observer's update);
@@ -28,13 +30,11 @@ still runs the next cycle does not start another one of its kind.
 
 from __future__ import annotations
 
-import asyncio
 import dataclasses
 import logging
 import math
 import time
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
 from typing import TypeVar
 
 import numpy as np
@@ -47,6 +47,7 @@ from dsfd.control.optimiser import ControlProblem, Decision, MpcOptimiser
 from dsfd.control.paper_sqp import optimise_paper_sqp
 from dsfd.daemon.calibration import CalibrationStage, UpdateOutcome
 from dsfd.daemon.clock import Clock, Slot, WallClockWatch
+from dsfd.daemon.device_io import DeviceIO, DeviceReading
 from dsfd.daemon.hold import HoldUpdate
 from dsfd.daemon.jobs import OffLoopJob
 from dsfd.daemon.logging_setup import get_logger
@@ -56,17 +57,8 @@ from dsfd.daemon.outcome import CycleOutcome
 from dsfd.daemon.quality import QualityChecker
 from dsfd.daemon.record import cycle_record
 from dsfd.daemon.safety import SafetyContext, SafetyPipeline
-from dsfd.daemon.startup import DEFAULT_READ_BUDGET_S, DEFAULT_WRITE_BUDGET_S
 from dsfd.daemon.weather import CycleWeather, forecast_forcing, measured_weather
-from dsfd.drivers.base import (
-    Command,
-    Driver,
-    Quality,
-    Reading,
-    Sample,
-    WriteResult,
-    command_from_values,
-)
+from dsfd.drivers.base import Command, Driver, Sample
 from dsfd.physics.constants import T_ZERO
 from dsfd.physics.forcing import FacadeOptics, Forcing, WeatherInputs, step_inputs
 from dsfd.physics.model import LumpedModel
@@ -78,15 +70,6 @@ log = get_logger(__name__)
 T = TypeVar("T")
 
 
-@dataclass
-class _Reading:
-    """What the read stage brought in."""
-
-    sample: Sample
-    read_back: Command | None
-    input_active: bool | None
-
-
 class Controller:
     """The cycle of one panel (drivers, clock and store given by the runner)."""
 
@@ -94,12 +77,12 @@ class Controller:
                  calibration: CalibrationStage, write_enabled: bool,
                  plant_heat_j: Callable[[], Mapping[str, float] | None] | None = None) -> None:
         self.driver = driver
+        self.io = DeviceIO(driver, write_enabled=write_enabled)
         #: A simulated plant's cumulative room heat by term [J] (None: real hardware).
         self.plant_heat_j = plant_heat_j
         self.clock = clock
         self.store = store
         self.calibration = calibration
-        self.write_enabled = write_enabled
         self.quality = QualityChecker(cfg.daemon.quality)
         self.safety = SafetyPipeline(cfg)
         self.manual = ManualStage(cfg, store)
@@ -107,11 +90,6 @@ class Controller:
         self.optimise_job = OffLoopJob("optimisation")
         self.calibrate_job = OffLoopJob("calibration update")
         self.store_job = OffLoopJob("store")
-        self._last_written: Command | None = None
-        #: Where the actuators should be: the last verified write, or the position a hold
-        #: took over; None after an unverified write (no manual-move detection then).
-        self._expected: Command | None = None
-        self._writes_failing = 0  # consecutive failed writes: the first is logged loudly
         self._grid0_s: float | None = None  # the first cycle's slot on the monotonic grid
         self._clock_watch = WallClockWatch()
         self._configure(cfg)
@@ -124,9 +102,7 @@ class Controller:
         self.optics = FacadeOptics(cfg)
         self.observer = StateObserver(model, max_predicted_cycles=cfg.daemon.max_predicted_cycles)
         self.mpc = MpcOptimiser(cfg)
-        devices = cfg.devices
-        self.read_budget_s = devices.read_budget_s if devices else DEFAULT_READ_BUDGET_S
-        self.write_budget_s = devices.write_budget_s if devices else DEFAULT_WRITE_BUDGET_S
+        self.io.configure(cfg.devices)
 
     def reconfigure(self, cfg: PanelConfig) -> str:
         """Switch to a reloaded, validated configuration between cycles."""
@@ -139,17 +115,10 @@ class Controller:
     # ------------------------------------------------------------------ the cycle
     async def run_cycle(self, slot: Slot) -> CycleOutcome:
         """Run one cycle at ``slot``; never raises for device or numerical faults."""
-        self.cycles += 1
         t: dict[str, float] = {}
         t0 = time.perf_counter()
-        now_s = self.clock.wall()
-        events = self._clock_events(now_s)
-        if self._grid0_s is None:
-            self._grid0_s = slot.deadline_s
-        if slot.skipped:
-            self.observer.reset()  # the prediction spans one step; a gap restarts it
-
-        got = await self._read(now_s)
+        now_s, events = self._begin(slot)
+        got = await self.io.read(now_s)
         plant_heat = self.plant_heat_j() if self.plant_heat_j is not None else None
         t["read"] = _ms(t0)
         mark = time.perf_counter()
@@ -160,7 +129,7 @@ class Controller:
         held = self._hold_update(slot, now_s, got)
         hold = held.hold
         # While held, the positions read back are what the panel got.
-        current = got.read_back or self._expected or self._last_written
+        current = got.read_back or self.io.expected or self.io.last_written
         mark = time.perf_counter()
         weather = measured_weather(self.cfg, checked)
         estimate = self._estimate(checked, weather, current)
@@ -172,9 +141,7 @@ class Controller:
 
         mark = time.perf_counter()
         objective, objective_by = self.manual.objective_mode
-        heating = (None if weather.inputs is None
-                   else is_heating(self._control(objective), float(weather.inputs.t_out_k[0])))
-        forecast = None if weather.inputs is None else self._forecast(weather.inputs, now_s)
+        heating, forecast = self._outlook(weather, objective, now_s)
         if hold is None:
             decision, method, fallback, no_decision = await self._decide(
                 weather, estimate, current, checked, forecast, heating=bool(heating))
@@ -183,21 +150,17 @@ class Controller:
         t["decide"] = _ms(mark)
 
         mark = time.perf_counter()
-        wind = checked.good("wind_speed_ms")
-        ctx = SafetyContext(now_s=self.clock.monotonic(), wind_speed_ms=wind,
+        ctx = SafetyContext(now_s=self.clock.monotonic(),
+                            wind_speed_ms=checked.good("wind_speed_ms"),
                             bad_signals=frozenset(report.flags), current=current,
                             no_decision_reason=no_decision, hold=hold)
-        proposal = None if decision is None else _command_or_none(decision)
-        safe = self.safety.apply(proposal, ctx)
+        safe = self.safety.apply(None if decision is None else _command_or_none(decision), ctx)
         if safe.faulted:  # the faults stage replaced the decision
             method = "safe"
         t["safety"] = _ms(mark)
 
         mark = time.perf_counter()
-        if safe.write:
-            write, status = await self._write(safe.command)
-        else:
-            write, status = None, "held"
+        write, status = await self.io.write(safe.command) if safe.write else (None, "held")
         t["write"] = _ms(mark)
         # Held or a dry run: the positions read back are what the panel got.
         applied = safe.command if status not in ("dry-run", "held") else current
@@ -210,8 +173,7 @@ class Controller:
         outcome = CycleOutcome(
             cycle=self.cycles, slot=slot.index, skipped_slots=slot.skipped, time_s=now_s,
             method=method, command=safe.command, proposed=decision, fallback=fallback,
-            heating=heating,
-            safety=safe, write_status=status, write=write, quality=report,
+            heating=heating, safety=safe, write_status=status, write=write, quality=report,
             calibration=calibration, timings_ms=t, manual_override=bool(held.moved),
             estimate=estimate, applied=applied, horizon_x_k=horizon_x,
             horizon_s=self.cfg.control.horizon_steps * self.cfg.model.step_s,
@@ -225,6 +187,26 @@ class Controller:
         t["store"] = _ms(mark)
         t["total"] = _ms(t0)
         return outcome
+
+    def _begin(self, slot: Slot) -> tuple[float, list[tuple[str, str, str]]]:
+        """Count the cycle; its wall-clock time and the events of a wall-clock step."""
+        self.cycles += 1
+        now_s = self.clock.wall()
+        events = self._clock_events(now_s)
+        if self._grid0_s is None:
+            self._grid0_s = slot.deadline_s
+        if slot.skipped:
+            self.observer.reset()  # the prediction spans one step; a gap restarts it
+        return now_s, events
+
+    def _outlook(self, weather: CycleWeather, objective: str, now_s: float
+                 ) -> tuple[bool | None, Forcing | None]:
+        """Heating (else cooling) now under ``objective``, and the forecast over the
+        horizon; both None without the weather."""
+        if weather.inputs is None:
+            return None, None
+        heating = is_heating(self._control(objective), float(weather.inputs.t_out_k[0]))
+        return heating, self._forecast(weather.inputs, now_s)
 
     def _control(self, objective: str) -> Control:
         """The control settings with the objective in force (an operator's ``mode``)."""
@@ -245,37 +227,18 @@ class Controller:
         log.warning(why, step_s=round(step, 3))
         return [("warning", "clock_step", why)]
 
-    def _hold_update(self, slot: Slot, now_s: float, got: _Reading) -> HoldUpdate:
+    def _hold_update(self, slot: Slot, now_s: float, got: DeviceReading) -> HoldUpdate:
         up = self.manual.update(now_mono_s=slot.deadline_s, now_s=now_s,
-                                read_back=got.read_back, expected=self._expected,
+                                read_back=got.read_back, expected=self.io.expected,
                                 input_active=got.input_active,
                                 input_where=self.driver.override_input or "")
         if up.adopted:
-            self._expected = got.read_back  # the panel is where the person put it
+            self.io.expected = got.read_back  # the panel is where the person put it
         self.manual.handled(up.results)
         for level, kind, message in up.events:
             log.log(logging.WARNING if level == "warning" else logging.INFO, message,
                     event_kind=kind)
         return up
-
-    async def _read(self, now_s: float) -> _Reading:
-        """Sample, actuator position now, and the override input."""
-        try:
-            async with asyncio.timeout(self.read_budget_s):
-                sample, actuators, active = await asyncio.gather(
-                    self.driver.read(now_s), self.driver.read_actuators(),
-                    self.driver.read_override_input())
-        except Exception as exc:  # the drivers should not raise; the loop must not die
-            if isinstance(exc, TimeoutError):
-                why, quality = f"read exceeded its budget of {self.read_budget_s:g} s", \
-                    Quality.TIMEOUT
-            else:
-                log.exception("read failed")
-                why, quality = f"read failed: {type(exc).__name__}: {exc}", Quality.DEVICE_ERROR
-            sample = Sample(now_s, {n: Reading.bad(quality, "daemon", why)
-                                    for n in self.driver.sensor_names})
-            actuators, active = {}, None
-        return _Reading(sample, command_from_values(actuators), active)
 
     def _estimate(self, checked: Sample, weather: CycleWeather, current: Command | None
                   ) -> StateEstimate:
@@ -365,36 +328,6 @@ class Controller:
             mpc = self.mpc
             return lambda: optimise_paper_sqp(self.cfg, mpc.model, mpc.optics, problem)
         return lambda: self.mpc.decide(problem)
-
-    async def _write(self, cmd: Command) -> tuple[WriteResult | None, str]:
-        if not self.write_enabled:
-            return None, "dry-run"
-        try:
-            async with asyncio.timeout(self.write_budget_s):
-                result = await self.driver.write(cmd)
-        except Exception as exc:
-            if not isinstance(exc, TimeoutError):
-                log.exception("write failed")
-            why = (f"write exceeded its budget of {self.write_budget_s:g} s"
-                   if isinstance(exc, TimeoutError) else f"write failed: {exc}")
-            result = WriteResult(requested=cmd, owned=self.driver.actuator_names, errors=(why,))
-        self._last_written = cmd
-        if result.ok:
-            if self._writes_failing:
-                log.info("commands verified again after %d failed write(s)",
-                         self._writes_failing)
-            self._writes_failing = 0
-            self._expected = cmd
-            return result, "verified"
-        # A failed verification is not a manual override: forget the expected position, so
-        # the next read-back is not compared with a command that may never have arrived.
-        self._expected = None
-        self._writes_failing += 1
-        log.log(logging.WARNING if self._writes_failing == 1 else logging.DEBUG,
-                "command %s not verified: %s", cmd.as_dict(),
-                "; ".join(result.errors) or "read-back incomplete",
-                failed_writes=self._writes_failing)
-        return result, "failed"
 
     async def _store(self, out: CycleOutcome, weather: CycleWeather) -> bool:
         """Queue the cycle's rows and write what waits; a failed write keeps them queued."""
