@@ -1,7 +1,8 @@
 """The controller daemon (``dsfd run``): the edge around the pure core.
 
 Modules: ``runner`` (start-up, cycle grid, signals, reload, systemd), ``startup`` (what is
-checked before anything is opened), ``loop`` (one cycle: read → quality → estimate →
+checked before anything is opened), ``state`` (what a start takes over from the state
+directory), ``loop`` (one cycle: read → quality → estimate →
 calibrate → optimise → safety → write → store) with ``device_io`` (the read and write
 stages), ``outcome`` and ``jobs``, ``clock``, ``quality``, ``weather`` (measured weather →
 forcing), ``observer``, ``calibration`` (the on-line calibrator's record and state file),

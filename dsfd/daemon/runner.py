@@ -4,8 +4,8 @@ Start-up order matters: the configuration (and the run-time checks below) is val
 before anything is opened, so a bad file exits non-zero naming the key path without
 touching a device; then the state directory's lock (a second daemon on the same directory
 stops here, naming the holder's PID, before it opens anything); then the database and the
-calibration state; then a manual hold the previous run left active; then the drivers; then
-``READY=1``.
+calibration state, and a manual hold the previous run left active (:mod:`dsfd.daemon.state`);
+then the drivers; then ``READY=1``.
 
 Signals: SIGTERM/SIGINT stop after the current cycle (``STOPPING=1``, the run is marked
 ended in the database, the summary printed); SIGHUP reloads the file between cycles
@@ -26,21 +26,18 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol
 
-from dsfd import __version__
 from dsfd.config import ConfigError, ConfigIssue, PanelConfig
-from dsfd.daemon.calibration import CalibrationStage
 from dsfd.daemon.clock import Clock, CycleGrid, RealClock, SimulatedClock, Slot
 from dsfd.daemon.logging_setup import bind_contextvars, bound_contextvars, get_logger
 from dsfd.daemon.loop import Controller, CycleOutcome
 from dsfd.daemon.metrics import MetricsFile
 from dsfd.daemon.notify import Notifier
 from dsfd.daemon.startup import load_for_run, runtime_problems
+from dsfd.daemon.state import open_state, restore_operator_state
 from dsfd.daemon.summary import RunSummary
 from dsfd.drivers.base import Driver
 from dsfd.measured import iso_utc
-from dsfd.physics.model import LumpedModel
 from dsfd.storage.lock import StateLock
-from dsfd.storage.queries import last_decision, parameter_history, run_control_mode
 from dsfd.storage.timeseries import Store
 
 __all__ = ["Integration", "PlantUnderTest", "RunOptions", "load_for_run", "runtime_problems",
@@ -320,6 +317,24 @@ async def serve(opts: RunOptions, cfg: PanelConfig, *, state_dir: Path,
         lock.release()
 
 
+def _clock_and_driver(opts: RunOptions, cfg: PanelConfig, plant: PlantUnderTest | None,
+                      clock: Clock | None, print_line: Callable[[str], None]
+                      ) -> tuple[Clock, Driver]:
+    """The simulated plant's clock and driver, or the devices' drivers (not yet started)
+    on the real clock (or a simulated one with ``--speed``); ``clock`` replaces the clock."""
+    if plant is not None:
+        for note in plant.notes:
+            print_line(f"  {note}")
+        return clock or SimulatedClock(start_utc_s=plant.start_s, speed=opts.speed), plant.driver
+    from dsfd.drivers.factory import build_drivers
+
+    clock = clock or (RealClock() if opts.speed is None else SimulatedClock(
+        start_utc_s=opts.start_s if opts.start_s is not None else RealClock().wall(),
+        speed=opts.speed))
+    assert cfg.devices is not None  # runtime_problems guarantees it
+    return clock, build_drivers(cfg.devices, clock=clock.monotonic)
+
+
 async def _serve_locked(opts: RunOptions, cfg: PanelConfig, *, state_dir: Path,
                         plant: PlantUnderTest | None, integrations: Sequence[Integration],
                         print_line: Callable[[str], None], clock: Clock | None
@@ -329,37 +344,14 @@ async def _serve_locked(opts: RunOptions, cfg: PanelConfig, *, state_dir: Path,
     signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
     bind_contextvars(panel=cfg.panel.id)
     notifier = Notifier()
-    if plant is not None:
-        clock = clock or SimulatedClock(start_utc_s=plant.start_s, speed=opts.speed)
-        driver: Driver = plant.driver
-        for note in plant.notes:
-            print_line(f"  {note}")
-    else:
-        from dsfd.drivers.factory import build_drivers
-
-        clock = clock or (RealClock() if opts.speed is None else SimulatedClock(
-            start_utc_s=opts.start_s if opts.start_s is not None else RealClock().wall(),
-            speed=opts.speed))
-        assert cfg.devices is not None  # runtime_problems guarantees it
-        driver = build_drivers(cfg.devices, clock=clock.monotonic)
-    store, calibration = _open_state(opts, cfg, state_dir, clock)
+    clock, driver = _clock_and_driver(opts, cfg, plant, clock, print_line)
+    store, calibration = open_state(opts, cfg, state_dir, clock)
     # A dry run never writes to hardware; an in-process simulated plant may follow.
     write_enabled = not opts.dry_run or not getattr(driver, "hardware", True)
     controller = Controller(cfg, driver=driver, clock=clock, store=store,
                             calibration=calibration, write_enabled=write_enabled,
                             plant_heat_j=None if plant is None else plant.room_heat_now)
-    last = _last_decision(store)
-    restored = controller.manual.restore(last, now_mono_s=clock.monotonic(),
-                                         now_s=clock.wall())
-    if restored:
-        log.warning("manual hold of the previous run restored: %s", restored)
-        store.event(cycle=0, time_s=clock.wall(), level="info", kind="hold_restored",
-                    message=restored)
-    objective = controller.manual.restore_mode(last, file_mode_then=_control_mode_of(store, last))
-    if objective:
-        log.warning("operator's choice of the previous run restored: %s", objective)
-        store.event(cycle=0, time_s=clock.wall(), level="info", kind="mode_restored",
-                    message=objective)
+    restore_operator_state(controller.manual, store, clock)
     daemon = _Daemon(opts, cfg, clock, driver, store, controller, notifier, integrations)
     daemon.summary.start_calibration(calibration)
     loop = asyncio.get_running_loop()
@@ -403,41 +395,3 @@ async def _serve_locked(opts: RunOptions, cfg: PanelConfig, *, state_dir: Path,
     log.info("daemon stopped", reason=reason, cycles=daemon.summary.cycles,
              cycle_failures=daemon.cycle_failures)
     return daemon.summary
-
-
-def _open_state(opts: RunOptions, cfg: PanelConfig, state_dir: Path, clock: Clock
-                ) -> tuple[Store, CalibrationStage]:
-    """The database (a corrupt one moved aside) and the calibration state (from the file,
-    else the database's parameter history, else the priors)."""
-    store = Store.open(state_dir, buffer_cycles=cfg.daemon.store_buffer_cycles)
-    store.begin_run(panel=cfg.panel.id, mode=opts.mode, version=__version__,
-                    config_path=str(opts.config_path), config=dataclasses.asdict(cfg))
-    if store.moved_aside is not None:
-        log.error("database was unusable and was moved aside; started a new one",
-                  moved_to=str(store.moved_aside))
-        store.event(cycle=0, time_s=clock.wall(), level="error", kind="database_recovered",
-                    message=f"corrupt database moved to {store.moved_aside.name}")
-    calibration = CalibrationStage(
-        cfg, LumpedModel(cfg), state_dir=state_dir,
-        history=lambda: parameter_history(store.reader(), cfg.panel.id))
-    if calibration.events:
-        log.warning(calibration.resume_message, theta=calibration.theta_by_name(),
-                    origin=calibration.origin)
-    else:
-        log.info(calibration.resume_message, theta=calibration.theta_by_name())
-    return store, calibration
-
-
-def _last_decision(store: Store) -> dict[str, object] | None:
-    try:
-        return last_decision(store.reader())
-    except sqlite3.Error:
-        return None
-
-
-def _control_mode_of(store: Store, last: Mapping[str, object] | None) -> str | None:
-    """``control.mode`` of the panel file the run of ``last`` used (None: unknown)."""
-    try:
-        return None if not last else run_control_mode(store.reader(), int(last["run_id"]))
-    except sqlite3.Error:
-        return None
