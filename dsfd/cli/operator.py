@@ -64,10 +64,8 @@ def load_target(args: argparse.Namespace, *, need_config: bool) -> tuple[Path, A
     if args.config is not None:
         try:
             cfg = load_panel(args.config)
-        except ConfigError as exc:
+        except ConfigError as exc:  # also a file that cannot be read, named
             raise OperatorError(str(exc), EXIT_USAGE) from None
-        except OSError as exc:
-            raise OperatorError(f"{args.config}: {exc.strerror or exc}", EXIT_USAGE) from None
     if args.state_dir is not None:
         state = args.state_dir
     elif cfg is not None:
@@ -117,7 +115,7 @@ def _config_of_last_run(state: Path) -> Any:
         raise OperatorError("the panel is not known: give --config PANEL", EXIT_USAGE)
     try:
         return load_panel(row[0])
-    except (ConfigError, OSError) as exc:
+    except ConfigError as exc:
         raise OperatorError(f"the daemon's panel file {row[0]} cannot be read ({exc}): give "
                             "--config PANEL", EXIT_USAGE) from None
 

@@ -62,11 +62,9 @@ def history_from_args(args: argparse.Namespace, command: str
     if args.config is not None:
         try:
             cfg = load_panel(args.config)
-        except ConfigError as exc:
+        except ConfigError as exc:  # also a file that cannot be read, named
             print(exc, file=sys.stderr)
             return None, None, 2
-        except OSError as exc:
-            return fail(str(exc))
         state_dir = state_dir_of(args.config, cfg)
     else:
         state_dir = args.state_dir
