@@ -78,3 +78,13 @@ def test_validate_logs_plain_progress_lines_when_stderr_is_a_file(faulted_run, t
     header = next(line for line in out.stdout.splitlines() if line.startswith("state "))
     assert header.split() == ["state", "self-calibrating", "uncalibrated", "persistence",
                               "measured"]
+
+
+def test_export_that_cannot_write_its_file_exits_1_naming_it(faulted_run, tmp_path, capsys):
+    blocked = tmp_path / "a-directory.csv"
+    blocked.mkdir()  # the CSV cannot replace a directory
+    assert main(["export", "--state-dir", str(faulted_run.state_dir), "--out",
+                 str(blocked)]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("dsfd export: ") and str(blocked) in err
+    assert blocked.is_dir() and not any(blocked.iterdir())
