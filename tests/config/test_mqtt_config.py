@@ -133,3 +133,30 @@ def test_broker_addresses_parse():
     for bad in ("host:http", ":1883", "host:0", "[::1"):
         with pytest.raises(ValueError):
             parse_broker(bad)
+
+
+@pytest.mark.parametrize("topic, why", [
+    ("", "must not be empty"), ("/dsfd/p", "must not start or end with '/'"),
+    ("dsfd/p/", "must not start or end with '/'"), ("dsfd//p", "empty level"),
+    ("d" * 1025, "too long"),
+])
+def test_topics_dsfd_cannot_publish_under_are_named_by_key(topic, why):
+    issues = _issues({"host": "b", "base_topic": topic, "discovery_prefix": topic})
+    assert why in issues["mqtt.base_topic"] and why in issues["mqtt.discovery_prefix"]
+
+
+def test_a_blank_host_is_named():
+    assert "must not be empty" in _issues({"host": "  "})["mqtt.host"]
+
+
+def test_password_and_tls_files_that_cannot_be_used_are_named_by_key(tmp_path, monkeypatch):
+    monkeypatch.delenv("CREDENTIALS_DIRECTORY", raising=False)
+    (tmp_path / "pw").write_text("\n")  # a first line, but an empty one
+    cfg = panel_from_mapping(_panel({"host": "b", "username": "u", "password_file": "pw",
+                                     "tls": {"ca_file": "ca.pem"}}))
+    with pytest.raises(ConfigError) as exc:
+        resolve_link(cfg, config_path=tmp_path / "panel.yaml")
+    issues = {issue.path: issue.message for issue in exc.value.issues}
+    assert set(issues) == {"mqtt.password_file", "mqtt.tls.ca_file"}
+    assert "the file is empty" in issues["mqtt.password_file"]
+    assert f"{tmp_path / 'ca.pem'}: not found or not readable" in issues["mqtt.tls.ca_file"]

@@ -5,6 +5,7 @@ from __future__ import annotations
 import subprocess
 import sys
 
+import pytest
 from prometheus_client.parser import text_string_to_metric_families
 
 from tests.daemon.harness import MORNING_ISO, ROOT, dsfd_command, query, write_panel
@@ -99,3 +100,19 @@ def test_a_report_without_matplotlib_exits_2_naming_the_extra(tmp_path):
     out = run_without("matplotlib", ["report", "--state-dir", str(tmp_path), "--out",
                                      str(tmp_path / "r.html")])
     assert out.returncode == 2 and "pip install 'dsfd[report]'" in out.stderr
+
+
+def test_a_metrics_file_must_be_a_prom_file_in_a_directory_that_exists(tmp_path):
+    from dsfd.config import ConfigError
+    from dsfd.daemon.startup import load_for_run
+
+    nowhere = tmp_path / "no-such-directory"
+    for path, why in ((tmp_path / "dsfd.txt", "must end in .prom"),
+                      (nowhere / "dsfd.prom", f"directory {nowhere} does not exist")):
+        panel = write_panel(tmp_path / "panel.yaml", devices=False,
+                            extra={"daemon": {"metrics_file": str(path)}})
+        with pytest.raises(ConfigError) as exc:
+            load_for_run(panel, simulated_plant=True, dry_run=True)
+        (issue,) = exc.value.issues
+        assert issue.path == "daemon.metrics_file" and why in issue.message
+        assert not path.exists()
