@@ -20,6 +20,7 @@ from tests.daemon.harness import (
     DaemonProcess,
     UntouchedDevice,
     dsfd_command,
+    free_port,
     query,
     write_panel,
 )
@@ -114,3 +115,38 @@ def test_sighup_keeps_the_old_config_when_the_new_one_is_bad(tmp_path: Path) -> 
     (reason, cycles), = query(db, "SELECT end_reason, cycles FROM runs")
     assert reason == "signal"
     assert sorted(methods) == daemon.cycles_logged == list(range(1, cycles + 1))
+
+
+def test_sighup_keeps_the_state_directory_and_mqtt_until_a_restart(tmp_path: Path) -> None:
+    panel = write_panel(tmp_path / "panel.yaml", devices=False)
+    doc = yaml.safe_load(panel.read_text())
+    state, elsewhere = tmp_path / "state", tmp_path / "elsewhere"
+
+    async def scenario() -> DaemonProcess:
+        daemon = await DaemonProcess(["run", "--config", str(panel), "--dry-run", "--plant",
+                                      "sim", "--plant-fidelity", "lumped", "--speed", "240",
+                                      "--cycles", "400",
+                                      "--state-dir", str(state)]).start()
+        await daemon.wait_cycle(2)
+        # A broker nothing listens on, another state directory, and the baseline.
+        doc["mqtt"] = {"host": "127.0.0.1", "port": free_port()}
+        doc["daemon"]["state_directory"] = str(elsewhere)
+        doc["control"]["optimiser"] = "rule"
+        panel.write_text(yaml.safe_dump(doc, sort_keys=False))
+        daemon.signal(signal.SIGHUP)
+        await daemon.wait_for(lambda d: bool(d.events("configuration reloaded")))
+        await daemon.wait_cycle(daemon.cycles_logged[-1] + 3)
+        daemon.signal(signal.SIGTERM)
+        assert await daemon.wait_exit() == 0, daemon.stderr
+        return daemon
+
+    daemon = asyncio.run(scenario())
+    (kept,) = daemon.events("reload: ")
+    assert kept["event"] == ("reload: daemon.state_directory, mqtt changed; restart the "
+                             "service to apply")
+    (reloaded,) = [r["after_cycle"] for r in daemon.events("configuration reloaded")]
+    methods = dict(query(state / "timeseries.sqlite", "SELECT cycle, method FROM decisions"))
+    assert all(methods[c] == "rule" for c in methods if c > reloaded)  # the rest applied
+    assert not elsewhere.exists()
+    assert not [r for r in daemon.records if "mqtt" in r.get("event", "").lower()
+                and r is not kept]  # no publisher was started by the reload

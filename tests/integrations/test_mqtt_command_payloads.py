@@ -137,3 +137,33 @@ def test_a_flood_beyond_the_queue_is_dropped_counted_and_answered_once(cfg) -> N
     assert [(a["topic"], a["reason"]) for a in answers] == [
         (f"{BASE}/cmd/#", f"44 command message(s) dropped unread: more than {QUEUE_SIZE} "
          "were waiting")]
+
+
+def test_a_command_the_database_cannot_take_is_refused_and_answered(cfg, tmp_path: Path):
+    answers: list[dict] = []
+    r = CommandReceiver(cfg, base_topic=BASE, broker="b:1883",
+                        answer=lambda text: answers.append(json.loads(text)))
+    missing = tmp_path / "no-daemon-yet" / "timeseries.sqlite"  # opened read-write, never made
+    msg = _Message(f"{BASE}/cmd/resume", b"resume", 6, False)
+    assert r.handle(msg, database=missing) is None
+    (answer,) = answers
+    assert answer["topic"] == f"{BASE}/cmd/resume" and answer["payload"] == "resume"
+    assert answer["reason"].startswith("not queued: the database cannot be written (")
+    assert (r.queued, r.refused) == (0, 1) and not missing.exists()
+
+
+def test_a_stored_request_whose_fields_are_not_json_is_rejected_naming_them(cfg,
+                                                                           tmp_path: Path):
+    from dsfd.storage.commands import pending
+
+    store = Store.open(tmp_path)
+    with store.conn:  # a row written by hand (sqlite3), not by dsfd
+        store.conn.execute("INSERT INTO commands (requested_s, requested_utc, source, "
+                           "requester, kind, args) VALUES (0, '', 'sql', 'me', 'override', "
+                           "'hold=2h')")
+    (row,) = pending(store.conn)
+    assert row.args == {"args": "hold=2h"}
+    with pytest.raises(CommandError) as exc:
+        validate_command(cfg, row.request())
+    assert exc.value.field == "args" and "unknown field for override" in str(exc.value)
+    store.close()

@@ -153,6 +153,18 @@ def test_fleet_reports_a_broker_it_cannot_use(broker: LocalBroker, tmp_path: Pat
     assert empty.returncode == 2 and "--base 'a/+'" in empty.stderr
 
 
+def test_fleet_with_no_panel_under_its_base_exits_1_saying_so(broker: LocalBroker,
+                                                              tmp_path: Path) -> None:
+    password = tmp_path / "pw"
+    password.write_text(broker.password + "\n")
+    done = subprocess.run(dsfd_command("fleet", "--broker", broker.address, "--username",
+                                       broker.username, "--password-file", str(password),
+                                       "--base", "nobody-here", "--wait", "0"),
+                          cwd=ROOT, capture_output=True, text=True, timeout=60, check=False)
+    assert done.returncode == 1 and done.stdout == ""
+    assert f"no panel publishes under nobody-here/ on {broker.address}" in done.stderr
+
+
 def test_tls_to_a_broker_whose_certificate_chains_to_the_configured_ca(tmp_path: Path) -> None:
     if why := mosquitto_missing() or ("" if shutil.which("openssl") else "openssl missing"):
         pytest.skip(why)
