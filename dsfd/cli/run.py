@@ -26,7 +26,7 @@ from dsfd.config import ConfigError
 
 if TYPE_CHECKING:
     from dsfd.config import PanelConfig
-    from dsfd.daemon.runner import Integration
+    from dsfd.daemon.runner import Integration, RunOptions
 
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_BUSY = 0, 1, 2, 3
 
@@ -89,6 +89,33 @@ def _integrations(cfg: PanelConfig, config_path: Path) -> list[Integration]:
     return [publisher_for_run(cfg, config_path=config_path, version=__version__)]
 
 
+def _until_the_weather_ends(cfg: PanelConfig, opts: RunOptions) -> RunOptions:
+    """``--plant sim``: check the weather window; without ``--cycles`` the run lasts until
+    the weather record ends. ``FileNotFoundError``/``ValueError`` for bad weather."""
+    from dsfd.sim.daemon_plant import DEFAULT_WEATHER, cycles_covered, weather_window
+
+    series, start = weather_window(cfg, weather=opts.weather or DEFAULT_WEATHER,
+                                   start_s=opts.start_s)
+    if opts.cycles is None:
+        opts = dataclasses.replace(opts, cycles=cycles_covered(
+            series, start_s=start, period_s=cfg.daemon.cycle_period_s))
+    return opts
+
+
+def _announce(cfg: PanelConfig, opts: RunOptions, state_dir: Path, *, temporary: bool
+              ) -> None:
+    """What is about to run, and whether anything is written to hardware."""
+    print(f"dsfd run — panel {cfg.panel.id} ({opts.mode})")
+    if opts.dry_run:
+        print("  DRY RUN: commands are decided but NOTHING IS WRITTEN TO HARDWARE"
+              + ("; the simulated plant follows the decisions in-process"
+                 if opts.simulated_plant else ""))
+    elif opts.simulated_plant:
+        print("  simulated plant: nothing is written to hardware")
+    print(f"  state directory: {state_dir}"
+          + (" (temporary, removed at exit; --state-dir keeps it)" if temporary else ""))
+
+
 def run(args: argparse.Namespace) -> int:
     from dsfd.daemon.logging_setup import configure_logging
     from dsfd.daemon.runner import RunOptions, load_for_run, serve
@@ -126,33 +153,16 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_USAGE
     plant = None
     if opts.simulated_plant:
-        from dsfd.sim.daemon_plant import (
-            DEFAULT_WEATHER,
-            cycles_covered,
-            plant_for_run,
-            weather_window,
-        )
+        from dsfd.sim.daemon_plant import plant_for_run
 
         try:
-            series, start = weather_window(cfg, weather=opts.weather or DEFAULT_WEATHER,
-                                           start_s=start_s)
+            opts = _until_the_weather_ends(cfg, opts)
         except (FileNotFoundError, ValueError) as exc:
             print(f"dsfd run: {exc}", file=sys.stderr)
             return EXIT_USAGE
-        if opts.cycles is None:  # until the weather record ends
-            opts = dataclasses.replace(opts, cycles=cycles_covered(
-                series, start_s=start, period_s=cfg.daemon.cycle_period_s))
         plant = plant_for_run(cfg, opts)
     configure_logging()
-    print(f"dsfd run — panel {cfg.panel.id} ({opts.mode})")
-    if opts.dry_run:
-        print("  DRY RUN: commands are decided but NOTHING IS WRITTEN TO HARDWARE"
-              + ("; the simulated plant follows the decisions in-process"
-                 if opts.simulated_plant else ""))
-    elif opts.simulated_plant:
-        print("  simulated plant: nothing is written to hardware")
-    print(f"  state directory: {state_dir}"
-          + (" (temporary, removed at exit; --state-dir keeps it)" if temporary else ""))
+    _announce(cfg, opts, state_dir, temporary=temporary)
     import sqlite3
 
     from dsfd.storage.lock import StateDirBusyError
