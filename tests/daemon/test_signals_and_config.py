@@ -61,6 +61,13 @@ def test_simulated_start_outside_the_weather_is_a_usage_error(tmp_path: Path) ->
     assert "--start 2030-01-01T00:00:00Z is outside the weather" in done.stderr
 
 
+def _signalled_run(panel: Path, state: Path) -> list[str]:
+    """A dry run on the simulated plant, 60 simulated seconds every 0.25 s: slow enough to
+    signal between cycles."""
+    return ["run", "--config", str(panel), "--dry-run", "--plant", "sim", "--plant-fidelity",
+            "lumped", "--speed", "240", "--cycles", "400", "--state-dir", str(state)]
+
+
 def test_sighup_keeps_the_old_config_when_the_new_one_is_bad(tmp_path: Path) -> None:
     panel = write_panel(tmp_path / "panel.yaml", devices=False)
     good = yaml.safe_load(panel.read_text())
@@ -74,11 +81,7 @@ def test_sighup_keeps_the_old_config_when_the_new_one_is_bad(tmp_path: Path) -> 
         panel.write_text(yaml.safe_dump(doc, sort_keys=False))
 
     async def scenario() -> DaemonProcess:
-        # 60 simulated seconds every 0.25 s: slow enough to signal between cycles.
-        daemon = await DaemonProcess(["run", "--config", str(panel), "--dry-run", "--plant",
-                                      "sim", "--plant-fidelity", "lumped", "--speed", "240",
-                                      "--cycles", "400",
-                                      "--state-dir", str(state)]).start()
+        daemon = await DaemonProcess(_signalled_run(panel, state)).start()
         await daemon.wait_cycle(2)
         # The same switch to the baseline, but with a typo and a bad value: rejected whole.
         rewrite(control__optimiser="rule", control__horizon_step=5,
@@ -123,10 +126,7 @@ def test_sighup_keeps_the_state_directory_and_mqtt_until_a_restart(tmp_path: Pat
     state, elsewhere = tmp_path / "state", tmp_path / "elsewhere"
 
     async def scenario() -> DaemonProcess:
-        daemon = await DaemonProcess(["run", "--config", str(panel), "--dry-run", "--plant",
-                                      "sim", "--plant-fidelity", "lumped", "--speed", "240",
-                                      "--cycles", "400",
-                                      "--state-dir", str(state)]).start()
+        daemon = await DaemonProcess(_signalled_run(panel, state)).start()
         await daemon.wait_cycle(2)
         # A broker nothing listens on, another state directory, and the baseline.
         doc["mqtt"] = {"host": "127.0.0.1", "port": free_port()}
