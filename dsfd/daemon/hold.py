@@ -33,7 +33,7 @@ from dsfd.drivers.base import Command
 from dsfd.measured import iso_utc
 
 __all__ = ["HOLD_SOURCES", "Hold", "HoldTracker", "HoldUpdate", "PendingCommand",
-           "hold_seconds", "moved_actuators"]
+           "hold_seconds", "moved_actuators", "position_text"]
 
 HOLD_SOURCES = ("detected", "input", "operator")
 
@@ -184,7 +184,7 @@ class HoldTracker:
 
     def _start(self, up: HoldUpdate, hold: Hold) -> None:
         up.hold = hold
-        where = "position kept" if hold.position is None else _position(hold.position)
+        where = "position kept" if hold.position is None else position_text(hold.position)
         up.events.append(("info", "hold_started", f"{hold.describe()}: {where}"))
 
     def _timed(self, source: str, position: Command | None, now_mono_s: float, now_s: float,
@@ -216,7 +216,7 @@ class HoldTracker:
     def _detected(self, up: HoldUpdate, now_mono_s: float, now_s: float,
                   read_back: Command) -> None:
         up.events.append(("warning", "manual_override", "actuators moved by someone else: "
-                          f"{', '.join(up.moved)} now {_position(read_back)}"))
+                          f"{', '.join(up.moved)} now {position_text(read_back)}"))
         up.adopted = True
         if up.hold is not None and up.hold.source == "input":
             up.hold = replace(up.hold, position=read_back)  # adjusted by hand while held
@@ -256,7 +256,7 @@ class HoldTracker:
                            command_id=cid, by=f"#{cid} {pending.source} {pending.requester}")
         self._start(up, hold)
         up.results.append((cid, "applied", f"{hold.describe()}: "
-                           + ("position kept" if position is None else _position(position))))
+                           + ("position kept" if position is None else position_text(position))))
 
 
 def _merge(base: Command | None, cmd: OperatorCommand) -> Command | None:
@@ -273,7 +273,8 @@ def _merge(base: Command | None, cmd: OperatorCommand) -> Command | None:
     return Command(phi_deg=values["phi_deg"], afr=int(values["afr"]), or_pct=values["or_pct"])
 
 
-def _position(c: Command) -> str:
+def position_text(c: Command) -> str:
+    """An actuator position as the log, the events and the watchdog status show it."""
     return f"louver {c.phi_deg:+.0f} deg, regime {c.afr}, dampers {c.or_pct:g} %"
 
 

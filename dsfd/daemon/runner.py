@@ -28,6 +28,7 @@ from typing import Any, Protocol
 
 from dsfd.config import ConfigError, ConfigIssue, PanelConfig
 from dsfd.daemon.clock import Clock, CycleGrid, RealClock, SimulatedClock, Slot
+from dsfd.daemon.hold import position_text
 from dsfd.daemon.logging_setup import bind_contextvars, bound_contextvars, get_logger
 from dsfd.daemon.loop import Controller, CycleOutcome
 from dsfd.daemon.metrics import MetricsFile
@@ -197,8 +198,7 @@ class _Daemon:
                  skipped=out.skipped_slots or None,
                  hold=None if out.hold is None else out.hold.describe(),
                  stored=None if out.store_ok else f"waiting ({self.store.buffer.waiting})")
-        self.notifier.watchdog(f"cycle {out.cycle}: {out.method}, louver {c.phi_deg:+.0f} deg, "
-                               f"regime {c.afr}, dampers {c.or_pct:g} %, "
+        self.notifier.watchdog(f"cycle {out.cycle}: {out.method}, {position_text(c)}, "
                                f"write {out.write_status}")
 
     def write_metrics(self, out: CycleOutcome) -> None:

@@ -27,7 +27,6 @@ the session is clean, so the broker keeps nothing for it (README, "Commands over
 from __future__ import annotations
 
 import contextvars
-import json
 import queue
 import sqlite3
 import threading
@@ -41,6 +40,7 @@ from dsfd.config import PanelConfig
 from dsfd.daemon.commands import CommandError, validate_command
 from dsfd.daemon.logging_setup import get_logger
 from dsfd.integrations.mqtt.commands import MAX_PAYLOAD_BYTES, error_message, request_of, shown
+from dsfd.integrations.mqtt.messages import dumps
 from dsfd.storage import commands as command_table
 from dsfd.storage.timeseries import BUSY_TIMEOUT_MS
 
@@ -173,7 +173,7 @@ class CommandReceiver:
         what = "refused" if command_id is None else "rejected"
         self._log(f"MQTT command {what}: {reason}", topic=msg.topic,
                   payload=shown(msg.payload, size=msg.size), payload_bytes=msg.size)
-        self.answer(json.dumps(answer, ensure_ascii=False, separators=(",", ":")))
+        self.answer(dumps(answer))
 
     def _answer_drops(self) -> None:
         dropped = self.dropped
@@ -184,8 +184,7 @@ class CommandReceiver:
         reason = (f"{n} command message(s) dropped unread: more than {QUEUE_SIZE} were "
                   "waiting")
         log.warning("MQTT %s", reason, dropped_total=dropped)
-        self.answer(json.dumps(error_message(f"{self.prefix}#", reason, b""),
-                               separators=(",", ":")))
+        self.answer(dumps(error_message(f"{self.prefix}#", reason, b"")))
 
     def _answer_rejections(self, conn: sqlite3.Connection) -> None:
         """Publish the loop's rejections of commands filed here."""
