@@ -1,12 +1,14 @@
-"""Atomic file replacement (no dsfd imports, so any edge module can use it)."""
+"""Atomic file replacement, and the name an unusable file is moved aside to (no dsfd
+imports, so any edge module can use it)."""
 
 from __future__ import annotations
 
 import os
 import tempfile
+from datetime import UTC, datetime
 from pathlib import Path
 
-__all__ = ["write_text_atomic"]
+__all__ = ["corrupt_name", "write_text_atomic"]
 
 
 def write_text_atomic(path: str | Path, text: str, *, newline: str = "\n") -> None:
@@ -32,3 +34,10 @@ def write_text_atomic(path: str | Path, text: str, *, newline: str = "\n") -> No
         os.fsync(dir_fd)
     finally:
         os.close(dir_fd)
+
+
+def corrupt_name(path: Path) -> Path:
+    """Where an unusable ``path`` is moved aside: ``<name>.corrupt.<UTC time>`` beside it
+    (microseconds, so two in one second do not collide)."""
+    stamp = datetime.now(UTC).strftime("%Y%m%dT%H%M%S.%fZ")
+    return path.with_name(f"{path.name}.corrupt.{stamp}")

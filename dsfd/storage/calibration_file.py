@@ -19,7 +19,6 @@ from __future__ import annotations
 import json
 import math
 import os
-from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
@@ -28,7 +27,7 @@ import yaml
 
 from dsfd.estimation.params import FIT_NAMES, OFFSET_NAMES, ParameterSpace
 from dsfd.estimation.state import CalibrationState, CalibrationStateError, state_from_dict
-from dsfd.storage.atomic import write_text_atomic
+from dsfd.storage.atomic import corrupt_name, write_text_atomic
 
 PARAMS_SCHEMA = "dsfd.parameters"
 PARAMS_SCHEMA_VERSION = 1
@@ -105,8 +104,7 @@ def load_state_or_prior(path: str | Path, *, space: ParameterSpace,
 def move_aside(path: str | Path) -> Path:
     """Rename an unusable state file to ``<name>.corrupt.<UTC time>``; the new name."""
     path = Path(path)
-    stamp = datetime.now(UTC).strftime("%Y%m%dT%H%M%S.%fZ")
-    target = path.with_name(f"{path.name}.corrupt.{stamp}")
+    target = corrupt_name(path)
     os.replace(path, target)
     return target
 

@@ -17,6 +17,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from dsfd.config.panel import PARAMETER_NAMES
+from dsfd.storage.atomic import corrupt_name
 
 __all__ = [
     "BUSY_TIMEOUT_MS",
@@ -298,8 +299,7 @@ def insert_meta(conn: sqlite3.Connection, key: str, value: str) -> None:
 
 def move_aside(path: Path) -> Path:
     """Rename ``path`` and its ``-wal``/``-shm`` companions to ``*.corrupt.<iso>``."""
-    stamp = datetime.now(UTC).strftime("%Y%m%dT%H%M%S.%fZ")
-    target = path.with_name(f"{path.name}.corrupt.{stamp}")
+    target = corrupt_name(path)
     for suffix in ("", "-wal", "-shm"):
         src = path.with_name(path.name + suffix)
         if src.exists():
