@@ -12,12 +12,12 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass
-from datetime import UTC, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from dsfd.report.kpis import Kpis, compute_kpis, prediction_errors, report_step_s
 from dsfd.storage.history import History
+from dsfd.storage.schema import iso_now
 
 if TYPE_CHECKING:
     from dsfd.config.panel import PanelConfig
@@ -78,8 +78,8 @@ def build_report(history: History, *, panel: PanelConfig | None = None, dpi: int
     errors = prediction_errors(history, report_step_s(history, config))
     kpis = compute_kpis(history, config, errors)
     figures = draw_figures(history, kpis, errors, config, dpi=dpi)
-    made = datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
-    return Report(history, config, kpis, figures, (*history.notes, *notes), made, __version__)
+    return Report(history, config, kpis, figures, (*history.notes, *notes), iso_now(),
+                  __version__)
 
 
 def render_html(report: Report) -> str:
