@@ -73,6 +73,22 @@ def _bench_paper_tables(args: argparse.Namespace) -> dict[str, float]:
     return figures
 
 
+def _bench_closed_loop(args: argparse.Namespace) -> dict[str, float]:
+    from dsfd.bench.closed_loop import CASES, CONTROLLERS, bench_closed_loop, report
+    from dsfd.sim.replay import load_weather
+
+    controllers = CONTROLLERS if args.controllers is None else tuple(
+        c.strip() for c in args.controllers.split(",") if c.strip())
+    figures = bench_closed_loop(
+        load_panel(args.config), load_weather(args.weather or "rmis-golden-2022-01"),
+        days=1.0 if args.days is None else args.days, seed=args.seed,
+        cases=tuple(args.case) if args.case else CASES, controllers=controllers,
+        progress=lambda msg: print(msg, file=sys.stderr, flush=True))
+    print(report(figures))
+    print()
+    return figures
+
+
 #: Benchmark targets: name → function(args) → flat figures.
 TARGETS: dict[str, Callable[[argparse.Namespace], dict[str, float]]] = {
     "model": _bench_model,
@@ -82,6 +98,7 @@ TARGETS: dict[str, Callable[[argparse.Namespace], dict[str, float]]] = {
     "daemon": _bench_daemon,
     "calibration": _bench_calibration,
     "paper-tables": _bench_paper_tables,
+    "closed-loop": _bench_closed_loop,
 }
 
 
@@ -96,7 +113,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="simulated duration where the target simulates (plant: 3; daemon: "
                    "10,000 one-minute cycles; paper-tables: 3 scored days after the "
                    "training day; plant-velocity: the paper's 8-11 Dec 2008, or with "
-                   "--weather from the record's second day to its end)")
+                   "--weather from the record's second day to its end; closed-loop: 1 scored "
+                   "day per case)")
     p.add_argument("--seed", type=int, default=0, help="seed of the target's randomness")
     p.add_argument("--cases", type=int, default=200,
                    help="control: random decision problems judged against brute force")
@@ -107,6 +125,12 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="paper-tables: the plant at the centre of the true-parameter prior "
                    "(docs/model.md#true-parameters) (f_true ~ 200, the speeds of the paper's "
                    "Table 1) instead of the seed's draw")
+    p.add_argument("--case", action="append", default=None,
+                   help="closed-loop: one case <clear|mixed|overcast>-<heating|cooling> "
+                   "(repeatable; default all six)")
+    p.add_argument("--controllers", default=None,
+                   help="closed-loop: comma-separated controllers (default rule, mpc, oracle, "
+                   "plant-oracle, mpc-true-weather, mpc-true-state)")
     p.add_argument("--json", type=Path, default=None, help="write the figures as JSON")
     p.set_defaults(handler=run)
 

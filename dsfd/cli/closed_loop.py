@@ -28,7 +28,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="run calibration and control against the truth plant: the optimiser "
                    "(mpc), the paper's SQP (paper-sqp), the rule-based baseline (rule), one "
                    "fixed command (fixed: --phi-deg/--afr/--or-pct, default 0 deg, regime 10)"
-                   " or the optimiser with perfect information (oracle)")
+                   ", the optimiser with perfect information (oracle), an offline reference "
+                   "that plans by rollouts on the truth plant itself (plant-oracle), or mpc "
+                   "given only the true weather or only the true state (mpc-true-weather, "
+                   "mpc-true-state)")
     g.add_argument("--calibration", choices=CALIBRATIONS, default="online",
                    help="on-line self-calibration (default), frozen --params (offline) or the "
                    "panel defaults (none)")
@@ -60,7 +63,7 @@ def check(args: argparse.Namespace) -> str | None:
     if args.csv is not None:
         return "--csv is for open-loop truth runs"
     if args.calibration == "offline" and args.params is None \
-            and args.controller not in ("fixed", "oracle"):
+            and args.controller not in ("fixed", "oracle", "plant-oracle"):
         return "--calibration offline needs --params PARAMS.yaml (made by dsfd calibrate)"
     return None
 

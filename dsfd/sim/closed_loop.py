@@ -17,7 +17,14 @@ Controllers:
   the plant's own parameters mapped to the lumped model
   (:meth:`~dsfd.sim.plant.config.TrueParameters.lumped_theta`) instead of a calibration.
   It bounds what better information can buy the optimiser; it is not a global optimum
-  (the optimiser still plans on the lumped model over 15 minutes).
+  (the optimiser still plans on the lumped model over 15 minutes);
+* ``plant-oracle`` — an offline reference that plans on the truth plant itself: every
+  decision rolls candidate commands out on copies of the plant from its true state with the
+  true weather (:mod:`dsfd.sim.oracle_search`), within the same actuator grid, horizon, move
+  penalty and safety pipeline;
+* ``mpc-true-weather``, ``mpc-true-state`` — ``mpc`` (with its calibration) given one piece
+  of the oracle's information: the true weather of the horizon, or the plant's true state.
+  They split what the oracle gains into forecast, state estimate and model.
 
 Calibration: ``online`` (the daemon's on-line self-calibration), ``offline`` (θ̂ from a
 ``dsfd calibrate`` parameter file, frozen) or ``none`` (the panel's defaults, frozen).
@@ -45,6 +52,7 @@ import numpy as np
 
 from dsfd.config.panel import PanelConfig
 from dsfd.control.objective import is_heating
+from dsfd.control.optimiser import ControlProblem, Decision
 from dsfd.daemon.calibration import CalibrationStage
 from dsfd.daemon.clock import SimulatedClock, Slot
 from dsfd.daemon.loop import Controller
@@ -58,6 +66,7 @@ from dsfd.physics.constants import T_ZERO
 from dsfd.physics.forcing import Forcing, WeatherInputs, facade_forcing
 from dsfd.physics.model import LumpedModel
 from dsfd.physics.solar import extraterrestrial_irradiance, solar_position
+from dsfd.sim.oracle_search import Candidate, PlantOracle, SearchSettings, room_objective_j
 from dsfd.sim.plant.actuators import Command
 from dsfd.sim.plant.config import PlantOptions
 from dsfd.sim.plant.model import ROOM_FLOWS
@@ -69,7 +78,10 @@ from dsfd.weather import WeatherSeries
 __all__ = ["CALIBRATIONS", "CONTROLLERS", "ClosedLoopResult", "ClosedLoopSettings",
            "run_closed_loop"]
 
-CONTROLLERS = ("mpc", "paper-sqp", "rule", "fixed", "oracle")
+CONTROLLERS = ("mpc", "paper-sqp", "rule", "fixed", "oracle", "plant-oracle",
+               "mpc-true-weather", "mpc-true-state")
+#: Controllers that plan with the plant's own parameters (no calibration).
+TRUE_THETA = ("oracle", "plant-oracle")
 CALIBRATIONS = ("online", "offline", "none")
 #: The uncontrolled reference: horizontal slats, all dampers closed (a buffer façade).
 DEFAULT_FIXED = Command(0.0, 10, 100.0)
@@ -99,9 +111,12 @@ class ClosedLoopSettings:
         The command of ``controller="fixed"``.
     options : PlantOptions, optional
         Plant switches (default: the full stratified plant).
+    search : SearchSettings
+        What ``plant-oracle`` rolls out.
     """
 
-    controller: Literal["mpc", "paper-sqp", "rule", "fixed", "oracle"] = "mpc"
+    controller: Literal["mpc", "paper-sqp", "rule", "fixed", "oracle", "plant-oracle",
+                        "mpc-true-weather", "mpc-true-state"] = "mpc"
     calibration: Literal["online", "offline", "none"] = "online"
     seed: int = 1
     hours: float | None = None
@@ -109,6 +124,7 @@ class ClosedLoopSettings:
     offline_theta: np.ndarray | None = None
     fixed_command: Command = DEFAULT_FIXED
     options: PlantOptions | None = None
+    search: SearchSettings = field(default_factory=SearchSettings)
 
     def check(self) -> None:
         """Raise ValueError for an impossible combination (the message says what to do)."""
@@ -117,7 +133,7 @@ class ClosedLoopSettings:
         if self.calibration not in CALIBRATIONS:
             raise ValueError(f"calibration {self.calibration!r}: choose one of {CALIBRATIONS}")
         if (self.calibration == "offline" and self.offline_theta is None
-                and self.controller not in ("fixed", "oracle")):
+                and self.controller not in ("fixed", *TRUE_THETA)):
             raise ValueError("calibration offline needs frozen parameters: pass --params "
                              "PARAMS.yaml (made by dsfd calibrate)")
 
@@ -149,9 +165,7 @@ class ClosedLoopResult:
     def j_per_cycle(self) -> np.ndarray:
         """Objective of each cycle's interval [J] (docs/model.md#control-objective, the cycle's
         mode)."""
-        q = self.heat_j
-        gains = q["q_cv_rd"] + q["q_sol_trans"] + q["q_air"]
-        return np.where(self.heating, -(gains + q["q_da"]), gains - q["q_da"])
+        return room_objective_j(self.heat_j, self.heating)
 
     def louver_moves(self) -> int:
         """Commanded louver angle changes."""
@@ -237,23 +251,75 @@ class _FrozenCalibration(CalibrationStage):
 
 
 class _OracleController(Controller):
-    """The controller with perfect information (see the module docstring)."""
+    """The controller with the plant's true state and/or true weather (module docstring)."""
 
     plant: Plant
+    true_state: bool = True
+    true_weather: bool = True
 
     def _estimate(self, checked, weather: CycleWeather, current: DriverCommand | None
                   ) -> StateEstimate:
+        if not self.true_state:
+            return super()._estimate(checked, weather, current)
         x = np.asarray(self.plant.true_state().x_mid_k, float)
         return StateEstimate(x_k=x, age_cycles=(0,) * 5, usable=True)
 
     def _forecast(self, measured: WeatherInputs, now_s: float) -> Forcing:
+        if not self.true_weather:
+            return super()._forecast(measured, now_s)
         return facade_forcing(self.cfg, self.plant.perfect_forecast(self.cfg.control.horizon_steps))
 
 
+class _PlantOracleController(_OracleController):
+    """Decisions by plant rollouts (:class:`~dsfd.sim.oracle_search.PlantOracle`)."""
+
+    search: PlantOracle
+
+    def _optimiser(self, problem: ControlProblem) -> Callable[[], Decision]:
+        current = None
+        if problem.previous_phi_deg is not None and problem.previous_afr is not None:
+            current = Candidate.of(problem.previous_phi_deg, problem.previous_afr,
+                                   problem.previous_or_pct or 0.0)
+        return lambda: self.search.decide(self.plant, problem, current=current,
+                                          feasible=self._as_applied(current))
+
+    def _as_applied(self, current: Candidate | None) -> Callable[[Candidate], Candidate]:
+        """What the safety pipeline's rate stage would let through this cycle (the louver
+        move interval and the OR dead-band): the command the plant would really get."""
+        s = self.cfg.safety
+        last = self.safety.last_louver_move_s
+        louver_held = (current is not None and last is not None
+                       and self.clock.monotonic() - last < s.min_louver_move_interval_s)
+
+        def applied(c: Candidate) -> Candidate:
+            if current is None:
+                return c
+            phi = current.phi_deg if louver_held else c.phi_deg
+            or_pct = c.or_pct
+            if (c.afr == current.afr and or_pct != current.or_pct
+                    and abs(or_pct - current.or_pct) < s.or_deadband_pct):
+                or_pct = current.or_pct
+            return Candidate.of(phi, c.afr, or_pct)
+
+        return applied
+
+
+#: Controller classes and the information they get: (class, true state, true weather).
+_CONTROLLER_CLASSES: dict[str, tuple[type[Controller], bool, bool]] = {
+    "oracle": (_OracleController, True, True),
+    "plant-oracle": (_PlantOracleController, True, True),
+    "mpc-true-weather": (_OracleController, False, True),
+    "mpc-true-state": (_OracleController, True, False),
+}
+
+
 def _controller_config(cfg: PanelConfig, controller: str) -> PanelConfig:
-    optimiser = {"mpc": "mpc", "oracle": "mpc", "paper-sqp": "paper-sqp", "rule": "rule"}
-    return dataclasses.replace(cfg, control=dataclasses.replace(
-        cfg.control, optimiser=optimiser[controller]))
+    optimiser = {"mpc": "mpc", "oracle": "mpc", "paper-sqp": "paper-sqp", "rule": "rule",
+                 "plant-oracle": "mpc", "mpc-true-weather": "mpc", "mpc-true-state": "mpc"}
+    control = dataclasses.replace(cfg.control, optimiser=optimiser[controller])
+    if controller == "plant-oracle":  # plant rollouts take seconds, not milliseconds
+        control = dataclasses.replace(control, time_budget_s=60.0)
+    return dataclasses.replace(cfg, control=control)
 
 
 def run_closed_loop(cfg: PanelConfig, series: WeatherSeries, settings: ClosedLoopSettings, *,
@@ -288,13 +354,13 @@ async def _run(cfg: PanelConfig, plant: Plant, settings: ClosedLoopSettings, sta
     ctrl_cfg = _controller_config(cfg, settings.controller) \
         if settings.controller != "fixed" else cfg
     model = LumpedModel(ctrl_cfg)
-    if settings.controller == "oracle":
+    if settings.controller in TRUE_THETA:
         theta = plant.params.lumped_theta(cfg)
     elif settings.calibration == "offline":
         theta = settings.offline_theta
     else:
         theta = None
-    if settings.controller != "oracle" and settings.calibration == "online":
+    if settings.controller not in TRUE_THETA and settings.calibration == "online":
         calibration = CalibrationStage(ctrl_cfg, model, state_dir=state_dir)
     else:
         calibration = _FrozenCalibration(ctrl_cfg, model, state_dir=state_dir, theta=theta)
@@ -303,11 +369,15 @@ async def _run(cfg: PanelConfig, plant: Plant, settings: ClosedLoopSettings, sta
     store = Store.open(state_dir)
     store.begin_run(panel=cfg.panel.id, mode="closed-loop simulation", version="sim",
                     config_path=None)
-    cls = _OracleController if settings.controller == "oracle" else Controller
+    cls, true_state, true_weather = _CONTROLLER_CLASSES.get(settings.controller,
+                                                            (Controller, False, False))
     controller = cls(ctrl_cfg, driver=driver, clock=clock, store=store,
                      calibration=calibration, write_enabled=True)
     if isinstance(controller, _OracleController):
         controller.plant = plant
+        controller.true_state, controller.true_weather = true_state, true_weather
+    if isinstance(controller, _PlantOracleController):
+        controller.search = PlantOracle(ctrl_cfg, settings=settings.search)
     heat: dict[str, list[float]] = {k: [] for k in ROOM_FLOWS}
     heating: list[bool] = []
     ghi: list[float] = []
