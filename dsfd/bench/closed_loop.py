@@ -13,7 +13,7 @@ the same window under every controller of :data:`CONTROLLERS`:
 * ``mpc-true-weather``, ``mpc-true-state``: ``mpc`` given one piece of the oracle's
   information, to split the shortfall into forecast, state estimate and model.
 
-Every run starts a warm-up before the scored day — half the scored duration, at most
+Every run starts a warm-up before the scored day — a quarter of the scored duration, at most
 ``warmup_h`` — clipped to the start of the record, so the on-line calibration has data
 behind it as it would in service; only the scored cycles are counted. The figure of merit
 per case is
@@ -54,7 +54,7 @@ CASES = tuple(f"{sky}-{season}" for sky in SKIES for season in SEASONS)
 #: The synthetic cooling period of the README's closed-loop section.
 COOLING_T_OUT_OFFSET_K = 25.0
 COOLING_ROOM_C = 25.0
-WARMUP_H = 12.0
+WARMUP_H = 6.0
 #: Clearness-index classes of the paper's Figure 11 (as ClosedLoopResult.conditions).
 KT_CLEAR, KT_OVERCAST = 0.55, 0.3
 
@@ -155,7 +155,7 @@ def bench_closed_loop(cfg: PanelConfig, series: WeatherSeries, *, days: float = 
     for case in cases:
         sky, season = case.split("-")
         day = skies[sky]
-        start = max(first, day.start_s - min(warmup_h, 12.0 * days) * 3600.0)
+        start = max(first, day.start_s - min(warmup_h, 6.0 * days) * 3600.0)
         start = float(np.ceil(start / 60.0) * 60.0)
         hours = (day.start_s - start) / 3600.0 + 24.0 * days
         ccfg, cseries = _case_config(cfg, series, season)
