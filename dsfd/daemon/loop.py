@@ -42,6 +42,7 @@ from dsfd.control.paper_sqp import optimise_paper_sqp
 from dsfd.daemon.calibration import CalibrationStage, UpdateOutcome
 from dsfd.daemon.clock import Clock, Slot
 from dsfd.daemon.logging_setup import get_logger
+from dsfd.daemon.memory import trim_heap
 from dsfd.daemon.observer import STATE_SIGNALS, StateEstimate, StateObserver
 from dsfd.daemon.quality import QualityChecker, QualityReport
 from dsfd.daemon.record import cycle_record
@@ -282,6 +283,7 @@ class Controller:
             log.warning("calibration update abandoned: %s; parameters kept", why)
             return UpdateOutcome(False, why, self.calibration.theta, math.nan, 0)
         outcome = self.calibration.accept(result, now_s=now_s)
+        trim_heap()  # the refit's temporaries are free now; give their pages back
         if outcome.updated:
             log.info("calibration updated", **self.calibration.theta_by_name(),
                      residuals=outcome.n_residuals)

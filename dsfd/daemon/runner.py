@@ -35,6 +35,7 @@ from dsfd.daemon.loop import (
     Controller,
     CycleOutcome,
 )
+from dsfd.daemon.memory import limit_malloc_arenas
 from dsfd.daemon.notify import Notifier
 from dsfd.daemon.summary import RunSummary
 from dsfd.drivers.base import Driver
@@ -272,27 +273,6 @@ class _Daemon:
         self.store.event(cycle=self.controller.cycles, time_s=self.clock.wall(), level="info",
                          kind="reload", message=f"{path}: {note}")
         self.notifier.ready("configuration reloaded")
-
-
-#: glibc's ``M_ARENA_MAX`` parameter of ``mallopt(3)``.
-_M_ARENA_MAX = -8
-
-
-def limit_malloc_arenas(arenas: int = 1) -> bool:
-    """Cap glibc's malloc arenas (default 8 per core) for the threads started after this.
-
-    The worker threads of the loop (``asyncio.to_thread``: calibration, optimisation, the
-    store) would each take an arena of their own; their fragmentation made ~30 MB of the
-    daemon's resident memory on a 2-core machine; one shared arena costs no measurable speed
-    (the threads spend their time in numpy, not in malloc). Same effect as
-    ``MALLOC_ARENA_MAX`` in the environment; a no-op where the C library is not glibc.
-    """
-    import ctypes
-
-    try:
-        return bool(ctypes.CDLL(None).mallopt(_M_ARENA_MAX, arenas))
-    except (OSError, AttributeError):
-        return False
 
 
 async def serve(opts: RunOptions, cfg: PanelConfig, *, state_dir: Path,
