@@ -21,7 +21,7 @@ from dsfd.weather import WeatherSeries
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """The closed-loop options of ``dsfd simulate``."""
-    from dsfd.sim.closed_loop import CALIBRATIONS, CONTROLLERS
+    from dsfd.sim.choices import CALIBRATIONS, CONTROLLERS
 
     g = p.add_argument_group("closed loop (with --plant truth)")
     g.add_argument("--controller", choices=CONTROLLERS, default=None,

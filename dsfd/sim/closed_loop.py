@@ -66,6 +66,7 @@ from dsfd.physics.constants import T_ZERO
 from dsfd.physics.forcing import Forcing, WeatherInputs, facade_forcing
 from dsfd.physics.model import LumpedModel
 from dsfd.physics.solar import extraterrestrial_irradiance, solar_position
+from dsfd.sim.choices import CALIBRATIONS, CONTROLLERS, TRUE_THETA
 from dsfd.sim.oracle_search import Candidate, PlantOracle, SearchSettings, room_objective_j
 from dsfd.sim.plant.actuators import Command
 from dsfd.sim.plant.config import PlantOptions
@@ -78,17 +79,13 @@ from dsfd.weather import WeatherSeries
 __all__ = ["CALIBRATIONS", "CONTROLLERS", "ClosedLoopResult", "ClosedLoopSettings",
            "run_closed_loop"]
 
-CONTROLLERS = ("mpc", "paper-sqp", "rule", "fixed", "oracle", "plant-oracle",
-               "mpc-true-weather", "mpc-true-state")
-#: Controllers that plan with the plant's own parameters (no calibration).
-TRUE_THETA = ("oracle", "plant-oracle")
+
 #: Stage budgets of a closed-loop run [s]. The daemon's budgets are wall-clock limits; the
 #: simulated clock does not wait for the wall clock, so on a loaded machine they would turn
 #: slow calibration updates into abandoned ones and change the energy figures with the
 #: machine's load. A run lifts them and counts the stages that took longer than the panel's
 #: budgets instead (``late_decisions``, ``late_calibrations``).
 SIM_BUDGET_S = 1e6
-CALIBRATIONS = ("online", "offline", "none")
 #: The uncontrolled reference: horizontal slats, all dampers closed (a buffer façade).
 DEFAULT_FIXED = Command(0.0, 10, 100.0)
 J_PER_KWH = 3.6e6

@@ -43,6 +43,8 @@ def test_the_daemon_bench_measures_a_process_without_the_plant():
     script = (
         "import json, sys\n"
         "from pathlib import Path\n"
+        "from dsfd.cli import build_parser\n"
+        "build_parser()  # as dsfd bench / dsfd run: the CLI must not load the plant either\n"
         "from dsfd.bench.daemon import bench_daemon\n"
         f"fig = bench_daemon(Path({str(PANEL)!r}), cycles=70, fidelity='lumped')\n"
         "fig['plant_in_daemon'] = float('dsfd.sim.plant.plant' in sys.modules)\n"
