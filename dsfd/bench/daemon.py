@@ -14,6 +14,9 @@ Figures (flat, units in the names):
 * ``rss_growth_mb`` — growth over the second half of the run: mean RSS over its last 10 %
   of the cycles minus the mean over the 10 % before the half-way point. A daemon that leaks
   shows it here; a flat one reads ≈ 0;
+* ``anon_mb_end``, ``file_mb_end`` — the resident memory at the end split into anonymous
+  pages (each daemon's own) and file-backed pages (code and read-only data of the
+  interpreter and the libraries, shared by all daemons of a machine);
 * ``import_rss_mb.<group>`` — resident memory each group of modules adds when imported in a
   fresh interpreter in the order a daemon loads them (``python`` is the bare interpreter,
   ``total`` all of them together), and ``import_rss_mb.plant`` what the simulated plant
@@ -45,7 +48,8 @@ from dsfd.daemon.logging_setup import configure_logging
 from dsfd.daemon.loop import CycleOutcome
 from dsfd.daemon.runner import RunOptions, load_for_run, serve
 
-__all__ = ["DEFAULT_CYCLES", "IMPORT_GROUPS", "bench_daemon", "import_rss_mb", "rss_mb"]
+__all__ = ["DEFAULT_CYCLES", "IMPORT_GROUPS", "bench_daemon", "import_rss_mb", "resident_split_mb",
+           "rss_mb"]
 
 DEFAULT_CYCLES = 10_000
 #: RSS is sampled every this many cycles.
@@ -69,6 +73,23 @@ def rss_mb() -> float:
     """Resident set size of this process now [MB] (Linux ``/proc/self/statm``)."""
     with open("/proc/self/statm", encoding="ascii") as fh:
         return int(fh.read().split()[1]) * _PAGE_MB
+
+
+def resident_split_mb() -> tuple[float, float]:
+    """(anonymous, file-backed) resident memory of this process [MB] (Linux smaps_rollup).
+
+    Anonymous pages (heap, Python objects, arrays) are each daemon's own; file-backed ones
+    (the interpreter's and the libraries' code and read-only data) are shared by every
+    daemon on the machine that maps the same files.
+    """
+    fields: dict[str, float] = {}
+    with open("/proc/self/smaps_rollup", encoding="ascii") as fh:
+        for line in fh:
+            name, _, value = line.partition(":")
+            if value.strip().endswith("kB"):
+                fields[name] = float(value.split()[0]) / 1024.0
+    anon = fields.get("Anonymous", float("nan"))
+    return anon, fields.get("Rss", float("nan")) - anon
 
 
 _IMPORT_SCRIPT = """
@@ -148,6 +169,7 @@ def bench_daemon(config: Path, *, cycles: int = DEFAULT_CYCLES, seed: int = 0,
             sink.close()
             plant.close()
     cpu1 = os.times()
+    anon_mb, file_mb = resident_split_mb()
     wall = time.perf_counter() - start
     n = summary.cycles
     at = np.array([c for c, _ in rss], float)
@@ -163,6 +185,8 @@ def bench_daemon(config: Path, *, cycles: int = DEFAULT_CYCLES, seed: int = 0,
         "rss_mb_max": float(mb.max()) if mb.size else rss_mb(),
         "rss_growth_mb": float(late.mean() - before.mean()) if before.size and late.size
         else float("nan"),
+        "anon_mb_end": anon_mb,
+        "file_mb_end": file_mb,
         **{f"import_rss_mb.{k}": v for k, v in imports.items()},
         "cpu_s_per_cycle": cpu_s / n if n else float("nan"),
         "plant_cpu_s_per_cycle": plant.cpu_s / n if n else float("nan"),
