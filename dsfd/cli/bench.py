@@ -30,7 +30,8 @@ def _bench_plant(args: argparse.Namespace) -> dict[str, float]:
 def _bench_plant_velocity(args: argparse.Namespace) -> dict[str, float]:
     from dsfd.bench.velocity import bench_plant_velocity
 
-    return bench_plant_velocity(load_panel(args.config), seeds=args.seeds, days=args.days,
+    seeds = 10 if args.seeds is None else args.seeds
+    return bench_plant_velocity(load_panel(args.config), seeds=seeds, days=args.days,
                                 weather=args.weather)
 
 
@@ -61,8 +62,23 @@ def _bench_control(args: argparse.Namespace) -> dict[str, float]:
 
 
 def _bench_paper_tables(args: argparse.Namespace) -> dict[str, float]:
-    from dsfd.bench.paper_tables import VALIDATION_DAYS, WEATHER, paper_tables, report
+    from dsfd.bench.paper_tables import (
+        VALIDATION_DAYS,
+        WEATHER,
+        paper_tables,
+        paper_tables_seeds,
+        report,
+        seeds_report,
+    )
 
+    if args.seeds is not None:
+        figures = paper_tables_seeds(
+            load_panel(args.config), args.seeds, weather=args.weather or WEATHER,
+            validation_days=VALIDATION_DAYS if args.days is None else args.days,
+            progress=lambda msg: print(msg, file=sys.stderr, flush=True))
+        print(seeds_report(figures))
+        print()
+        return figures
     figures = paper_tables(load_panel(args.config), seed=args.seed,
                            weather=args.weather or WEATHER,
                            validation_days=VALIDATION_DAYS if args.days is None else args.days,
@@ -118,8 +134,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=int, default=0, help="seed of the target's randomness")
     p.add_argument("--cases", type=int, default=200,
                    help="control: random decision problems judged against brute force")
-    p.add_argument("--seeds", type=int, default=10,
-                   help="plant-velocity: seeded draws of the plant's true parameters")
+    p.add_argument("--seeds", type=int, default=None,
+                   help="plant-velocity: seeded draws of the plant's true parameters (default "
+                   "10); paper-tables: run seeds 0..N-1 and print the per-seed cavity-speed "
+                   "table")
     p.add_argument("--weather", default=None, help="weather file or bundled name")
     p.add_argument("--prior-centre", action="store_true",
                    help="paper-tables: the plant at the centre of the true-parameter prior "
