@@ -14,8 +14,8 @@ Controllers:
 * ``fixed`` — no control: one command held throughout (default louver 0°, dampers closed);
 * ``oracle`` — the ``mpc`` optimiser with perfect information: the plant's true mid-height
   state instead of the observer, the true weather of the horizon instead of persistence, and
-  the plant's own parameters mapped to the lumped model
-  (:meth:`~dsfd.sim.plant.config.TrueParameters.lumped_theta`) instead of a calibration.
+  the plant's own parameters mapped to the lumped model (:func:`oracle_theta`) instead of a
+  calibration.
   It bounds what better information can buy the optimiser; it is not a global optimum
   (the optimiser still plans on the lumped model over 15 minutes);
 * ``plant-oracle`` — an offline reference that plans on the truth plant itself: every
@@ -62,6 +62,7 @@ from dsfd.drivers.base import Command as DriverCommand
 from dsfd.drivers.simulated import SimulatedDriver
 from dsfd.estimation.params import ParameterSpace, full_vector
 from dsfd.estimation.state import CalibrationState
+from dsfd.physics.airflow import ET, IB
 from dsfd.physics.constants import T_ZERO
 from dsfd.physics.forcing import Forcing, WeatherInputs, facade_forcing
 from dsfd.physics.model import LumpedModel
@@ -70,6 +71,7 @@ from dsfd.sim.choices import CALIBRATIONS, CONTROLLERS, TRUE_THETA
 from dsfd.sim.oracle_search import Candidate, PlantOracle, SearchSettings, room_objective_j
 from dsfd.sim.plant.actuators import Command
 from dsfd.sim.plant.config import PlantOptions
+from dsfd.sim.plant.flow import opening_resistance
 from dsfd.sim.plant.model import ROOM_FLOWS
 from dsfd.sim.plant.plant import Plant
 from dsfd.sim.replay import at_site, step_window
@@ -311,6 +313,32 @@ class _PlantOracleController(_OracleController):
         return applied
 
 
+def oracle_theta(cfg: PanelConfig, plant: Plant) -> np.ndarray:
+    """The plant's parameters on the lumped model's terms, for the controllers that plan with
+    them (``oracle``, ``plant-oracle``'s candidate ranking).
+
+    :meth:`~dsfd.sim.plant.config.TrueParameters.lumped_theta`, except for a plant whose
+    diagonal regimes are orifices (the full plant): there the lumped power law's c and n have
+    no true value, and the config's defaults (c 0.05, n 0.6) gave a regime-5 flow less than
+    half the plant's. They are the orifice law's instead: n = ½ and c = √(2/(ρ K)) with K the
+    plant's own diagonal path resistance at OR = 1 (both dampers and the cavity loss
+    f_true + K_L(φ), docs/model.md#plant-airflow), averaged over the louver positions (the
+    power law has no louver term).
+    """
+    theta = plant.params.lumped_theta(cfg)
+    if plant.options.diagonal_flow != "orifice":
+        return theta
+    model = plant.model
+    rho = cfg.model.air_density_kgm3
+    coefs = []
+    for phi in model.phis:
+        k_l = model.louver_terms(float(phi))[1]
+        k = opening_resistance(model.openings, [1.0] * 4, [True] * 4, plant.params.f, k_l)
+        coefs.append(math.sqrt(2.0 / (rho * (k[IB] + k[ET]))))
+    theta[7], theta[8] = float(np.mean(coefs)), 0.5
+    return theta
+
+
 #: Controller classes and the information they get: (class, true state, true weather).
 _CONTROLLER_CLASSES: dict[str, tuple[type[Controller], bool, bool]] = {
     "oracle": (_OracleController, True, True),
@@ -364,7 +392,7 @@ async def _run(cfg: PanelConfig, plant: Plant, settings: ClosedLoopSettings, sta
     ctrl_cfg = _controller_config(cfg, settings.controller)
     model = LumpedModel(ctrl_cfg)
     if settings.controller in TRUE_THETA:
-        theta = plant.params.lumped_theta(cfg)
+        theta = oracle_theta(cfg, plant)
     elif settings.calibration == "offline":
         theta = settings.offline_theta
     else:

@@ -20,7 +20,7 @@ import pytest
 
 from dsfd.control.objective import is_heating
 from dsfd.control.optimiser import ControlProblem, MpcOptimiser
-from dsfd.physics.forcing import facade_forcing
+from dsfd.physics.forcing import FacadeOptics, facade_forcing, step_inputs
 from dsfd.sim.oracle_search import Candidate, PlantOracle
 from dsfd.sim.plant.actuators import Command
 from dsfd.sim.plant.plant import Plant
@@ -132,3 +132,33 @@ def test_bench_closed_loop_reports_the_share_per_case(tmp_path):
     share = fig["clear-heating.mpc_share_of_plant_oracle_saving"]
     assert share == pytest.approx((j["rule"] - j["mpc"]) / (j["rule"] - j["plant-oracle"]))
     assert "plant-oracle" in proc.stdout
+
+
+def test_the_oracles_power_law_is_the_plants_diagonal_orifice(suwon, rmis_raw, rmis):
+    """The full plant's diagonal regimes are orifices; the lumped model with oracle_theta
+    predicts the plant's regime-5 cavity speed within 25 %, where the config's default
+    c, n (the plant's nominal lumped θ) predicted about half of it."""
+    from dsfd.physics.model import LumpedModel
+    from dsfd.sim.closed_loop import oracle_theta
+
+    plant = Plant(suwon, seed=1, weather_series=rmis_raw)
+    plant.reset(day_start(rmis, 1) + 2.0 * HOUR, command=Command(0.0, 5, 100.0))
+    plant.advance(1800.0)
+    model = LumpedModel(suwon)
+    forcing = facade_forcing(suwon, plant.perfect_forecast(10))
+    inputs = step_inputs(forcing, FacadeOptics(suwon).loads(forcing, 0.0))
+    x0 = np.asarray(plant.true_state().x_mid_k, float)
+    speeds = []
+    for _ in range(10):
+        plant.advance(60.0)
+        speeds.append(abs(plant.true_state().v_cav_ms))
+    v_plant = float(np.mean(speeds))
+
+    def v_model(theta):
+        traj = model.rollout(x0, np.full((1, 10), 5), np.ones((1, 10)), inputs, theta)
+        return float(np.mean(np.abs(traj.v_cav_ms)))
+
+    mapped = v_model(oracle_theta(suwon, plant))
+    nominal = v_model(plant.params.lumped_theta(suwon))
+    assert 0.8 < mapped / v_plant < 1.25
+    assert nominal / v_plant < 0.6
