@@ -1,19 +1,31 @@
-"""``dsfd bench daemon``: memory and cycle time of the daemon over a long accelerated dry run.
+"""``dsfd bench daemon``: memory, CPU and cycle time of the daemon over a long accelerated run.
 
-The whole daemon runs in this process — simulated plant on replayed real weather (repeated
-when the run is longer than the record), quality checks, observer, calibration, optimiser,
-safety pipeline, SQLite store — with the simulated clock running as fast as possible, so
-10,000 cycles (6.9 days) take minutes instead of a week.
+The daemon runs in this process — quality checks, observer, calibration, optimiser, safety
+pipeline, SQLite store — against the simulated truth plant on replayed real weather
+(repeated when the run is longer than the record), with the simulated clock running as
+fast as possible, so 10,000 cycles (6.9 days) take minutes instead of a week. The plant
+runs in a child process of its own (:mod:`dsfd.sim.remote_plant`), as the façade is not
+inside a deployed daemon either: this process's memory and CPU time are the daemon's.
 
 Figures (flat, units in the names):
 
-* ``rss_mb_start``, ``rss_mb_end``, ``rss_mb_max`` — resident set size at the first and
-  the last sample and the largest sampled during the run (every 50 cycles);
-* ``rss_growth_mb`` — mean RSS over the last 10 % of the cycles minus the mean over the
-  second 10 % (after warm-up: imports, caches, the first optimiser and calibration runs).
-  A daemon that leaks shows it here; a flat one reads ≈ 0;
+* ``rss_mb_start``, ``rss_mb_end``, ``rss_mb_max`` — resident set size of the daemon at the
+  first and the last sample and the largest sampled during the run (every 50 cycles);
+* ``rss_growth_mb`` — growth over the second half of the run: mean RSS over its last 10 %
+  of the cycles minus the mean over the 10 % before the half-way point. A daemon that leaks
+  shows it here; a flat one reads ≈ 0;
+* ``anon_mb_end``, ``file_mb_end`` — the resident memory at the end split into anonymous
+  pages (each daemon's own) and file-backed pages (code and read-only data of the
+  interpreter and the libraries, shared by all daemons of a machine);
+* ``import_rss_mb.<group>`` — resident memory each group of modules adds when imported in a
+  fresh interpreter in the order a daemon loads them (``python`` is the bare interpreter,
+  ``total`` all of them together), and ``import_rss_mb.plant`` what the simulated plant
+  (SciPy's integrator) would add on top — the daemon process does not load it;
+* ``cpu_s_per_cycle`` — the daemon process's CPU time (user + system) per cycle, and
+  ``plant_cpu_s_per_cycle`` that of the plant process (a deployment does not pay it);
+* ``plant_rss_mb_max`` — resident memory of the plant process;
 * ``cycle_ms_median``, ``cycle_ms_p99`` — wall time of one cycle (all stages, including the
-  plant's integration, which a real deployment does not pay);
+  wait for the plant's integration);
 * ``decide_ms_median``, ``calibrate_ms_p99``, ``read_ms_median`` — the main stages;
 * ``cycles``, ``calibration_updates``, ``fallback_cycles``, ``wall_s``.
 """
@@ -21,8 +33,11 @@ Figures (flat, units in the names):
 from __future__ import annotations
 
 import asyncio
+import json
 import logging
 import os
+import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -32,14 +47,26 @@ import numpy as np
 from dsfd.daemon.logging_setup import configure_logging
 from dsfd.daemon.loop import CycleOutcome
 from dsfd.daemon.runner import RunOptions, load_for_run, serve
-from dsfd.sim.daemon_plant import plant_for_run
 
-__all__ = ["DEFAULT_CYCLES", "bench_daemon", "rss_mb"]
+__all__ = ["DEFAULT_CYCLES", "IMPORT_GROUPS", "bench_daemon", "import_rss_mb", "resident_split_mb",
+           "rss_mb"]
 
 DEFAULT_CYCLES = 10_000
 #: RSS is sampled every this many cycles.
 RSS_EVERY = 50
 _PAGE_MB = os.sysconf("SC_PAGE_SIZE") / 2**20
+#: Module groups in the order a daemon loads them (each adds to the ones before it).
+IMPORT_GROUPS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    ("numpy", ("numpy",)),
+    ("asyncio", ("asyncio",)),
+    ("stdlib_and_small", ("sqlite3", "yaml", "structlog", "logging.handlers")),
+    ("pymodbus", ("pymodbus", "pymodbus.client", "serial")),
+    ("scipy_linalg", ("scipy.linalg",)),
+    ("scipy_optimize", ("scipy.optimize",)),
+    ("dsfd_core", ("dsfd.physics.model", "dsfd.control.optimiser", "dsfd.estimation")),
+    ("dsfd_daemon", ("dsfd.daemon.runner", "dsfd.drivers.factory", "dsfd.drivers.modbus")),
+    ("dsfd_cli", ("dsfd.cli",)),
+)
 
 
 def rss_mb() -> float:
@@ -48,10 +75,61 @@ def rss_mb() -> float:
         return int(fh.read().split()[1]) * _PAGE_MB
 
 
+def resident_split_mb() -> tuple[float, float]:
+    """(anonymous, file-backed) resident memory of this process [MB] (Linux smaps_rollup).
+
+    Anonymous pages (heap, Python objects, arrays) are each daemon's own; file-backed ones
+    (the interpreter's and the libraries' code and read-only data) are shared by every
+    daemon on the machine that maps the same files.
+    """
+    fields: dict[str, float] = {}
+    with open("/proc/self/smaps_rollup", encoding="ascii") as fh:
+        for line in fh:
+            name, _, value = line.partition(":")
+            if value.strip().endswith("kB"):
+                fields[name] = float(value.split()[0]) / 1024.0
+    anon = fields.get("Anonymous", float("nan"))
+    return anon, fields.get("Rss", float("nan")) - anon
+
+
+_IMPORT_SCRIPT = """
+import importlib, json, os, sys
+def rss():
+    with open('/proc/self/statm') as fh:
+        return int(fh.read().split()[1]) * os.sysconf('SC_PAGE_SIZE') / 2**20
+groups = json.loads(sys.argv[1])
+out = {'python': rss()}
+last = out['python']
+for name, mods in groups:
+    for m in mods:
+        importlib.import_module(m)
+    if name == 'dsfd_cli':
+        from dsfd.cli import build_parser
+        build_parser()
+    now = rss()
+    out[name], last = now - last, now
+out['total'] = last
+importlib.import_module('dsfd.sim.plant.plant')
+out['plant'] = rss() - last
+print(json.dumps(out))
+"""
+
+
+def import_rss_mb() -> dict[str, float]:
+    """What each module group of :data:`IMPORT_GROUPS` adds to a fresh interpreter [MB]."""
+    proc = subprocess.run([sys.executable, "-c", _IMPORT_SCRIPT,
+                           json.dumps([[n, list(m)] for n, m in IMPORT_GROUPS])],
+                          capture_output=True, text=True, timeout=120, check=True)
+    return {k: float(v) for k, v in json.loads(proc.stdout).items()}
+
+
 def bench_daemon(config: Path, *, cycles: int = DEFAULT_CYCLES, seed: int = 0,
                  weather: str | None = None, fidelity: str = "full",
                  progress: bool = False) -> dict[str, float]:
     """Run ``cycles`` dry-run cycles against the simulated plant and measure them."""
+    from dsfd.sim.remote_plant import PlantProcess  # (the plant itself: in the child)
+
+    imports = import_rss_mb()
     cfg = load_for_run(config, simulated_plant=True, dry_run=True)
     cycle_ms = np.full(cycles, np.nan)
     decide_ms = np.full(cycles, np.nan)
@@ -79,28 +157,40 @@ def bench_daemon(config: Path, *, cycles: int = DEFAULT_CYCLES, seed: int = 0,
     configure_logging(stream=sink, json=True, level=logging.WARNING)
     opts = RunOptions(config_path=config, dry_run=True, plant="sim", plant_fidelity=fidelity,
                       cycles=cycles, seed=seed, weather=weather, on_cycle=on_cycle)
+    plant = PlantProcess(cfg=cfg, cycles=cycles, seed=seed, fidelity=fidelity,
+                         **({} if weather is None else {"weather": weather}))
     start = time.perf_counter()
+    cpu0 = os.times()
     with tempfile.TemporaryDirectory(prefix="dsfd-bench-") as state:
         try:
-            summary = asyncio.run(serve(opts, cfg, state_dir=Path(state),
-                                        plant=plant_for_run(cfg, opts),
+            summary = asyncio.run(serve(opts, cfg, state_dir=Path(state), plant=plant,
                                         print_line=lambda _line: None))
         finally:
             sink.close()
+            plant.close()
+    cpu1 = os.times()
+    anon_mb, file_mb = resident_split_mb()
     wall = time.perf_counter() - start
     n = summary.cycles
     at = np.array([c for c, _ in rss], float)
     mb = np.array([m for _, m in rss], float)
     tenth = max(n // 10, RSS_EVERY)
-    early = mb[(at > tenth) & (at <= 2 * tenth)]
+    before = mb[(at > n // 2 - tenth) & (at <= n // 2)]
     late = mb[at > n - tenth]
+    cpu_s = (cpu1.user - cpu0.user) + (cpu1.system - cpu0.system)
     return {
         "cycles": float(n),
         "rss_mb_start": float(mb[0]) if mb.size else float("nan"),
         "rss_mb_end": float(mb[-1]) if mb.size else float("nan"),
         "rss_mb_max": float(mb.max()) if mb.size else rss_mb(),
-        "rss_growth_mb": float(late.mean() - early.mean()) if early.size and late.size
+        "rss_growth_mb": float(late.mean() - before.mean()) if before.size and late.size
         else float("nan"),
+        "anon_mb_end": anon_mb,
+        "file_mb_end": file_mb,
+        **{f"import_rss_mb.{k}": v for k, v in imports.items()},
+        "cpu_s_per_cycle": cpu_s / n if n else float("nan"),
+        "plant_cpu_s_per_cycle": plant.cpu_s / n if n else float("nan"),
+        "plant_rss_mb_max": plant.rss_mb_max,
         "cycle_ms_median": float(np.nanmedian(cycle_ms[:n])),
         "cycle_ms_p99": float(np.nanpercentile(cycle_ms[:n], 99)),
         "decide_ms_median": float(np.nanmedian(decide_ms[:n])),

@@ -30,7 +30,8 @@ def _bench_plant(args: argparse.Namespace) -> dict[str, float]:
 def _bench_plant_velocity(args: argparse.Namespace) -> dict[str, float]:
     from dsfd.bench.velocity import bench_plant_velocity
 
-    return bench_plant_velocity(load_panel(args.config), seeds=args.seeds, days=args.days,
+    seeds = 10 if args.seeds is None else args.seeds
+    return bench_plant_velocity(load_panel(args.config), seeds=seeds, days=args.days,
                                 weather=args.weather)
 
 
@@ -70,8 +71,23 @@ def _bench_control(args: argparse.Namespace) -> dict[str, float]:
 
 
 def _bench_paper_tables(args: argparse.Namespace) -> dict[str, float]:
-    from dsfd.bench.paper_tables import VALIDATION_DAYS, WEATHER, paper_tables, report
+    from dsfd.bench.paper_tables import (
+        VALIDATION_DAYS,
+        WEATHER,
+        paper_tables,
+        paper_tables_seeds,
+        report,
+        seeds_report,
+    )
 
+    if args.seeds is not None:
+        figures = paper_tables_seeds(
+            load_panel(args.config), args.seeds, weather=args.weather or WEATHER,
+            validation_days=VALIDATION_DAYS if args.days is None else args.days,
+            progress=lambda msg: print(msg, file=sys.stderr, flush=True))
+        print(seeds_report(figures))
+        print()
+        return figures
     result = paper_tables(load_panel(args.config), seed=args.seed,
                           weather=args.weather or WEATHER,
                           validation_days=VALIDATION_DAYS if args.days is None else args.days,
@@ -80,6 +96,22 @@ def _bench_paper_tables(args: argparse.Namespace) -> dict[str, float]:
     print(report(result))
     print()
     return result.figures
+
+
+def _bench_closed_loop(args: argparse.Namespace) -> dict[str, float]:
+    from dsfd.bench.closed_loop import CASES, CONTROLLERS, bench_closed_loop, report
+    from dsfd.sim.replay import load_weather
+
+    controllers = CONTROLLERS if args.controllers is None else tuple(
+        c.strip() for c in args.controllers.split(",") if c.strip())
+    figures = bench_closed_loop(
+        load_panel(args.config), load_weather(args.weather or "rmis-golden-2022-01"),
+        days=1.0 if args.days is None else args.days, seed=args.seed,
+        cases=tuple(args.case) if args.case else CASES, controllers=controllers,
+        progress=lambda msg: print(msg, file=sys.stderr, flush=True))
+    print(report(figures))
+    print()
+    return figures
 
 
 #: Benchmark targets: name → function(args) → flat figures.
@@ -92,6 +124,7 @@ TARGETS: dict[str, Callable[[argparse.Namespace], dict[str, float]]] = {
     "mqtt": _bench_mqtt,
     "calibration": _bench_calibration,
     "paper-tables": _bench_paper_tables,
+    "closed-loop": _bench_closed_loop,
 }
 
 
@@ -106,12 +139,15 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="simulated duration where the target simulates (plant: 3; daemon: "
                    "10,000 one-minute cycles; paper-tables: 3 scored days after the "
                    "training day; plant-velocity: the paper's 8-11 Dec 2008, or with "
-                   "--weather from the record's second day to its end)")
+                   "--weather from the record's second day to its end; closed-loop: 1 scored "
+                   "day per case)")
     p.add_argument("--seed", type=int, default=0, help="seed of the target's randomness")
     p.add_argument("--cases", type=int, default=200,
                    help="control: random decision problems judged against brute force")
-    p.add_argument("--seeds", type=int, default=10,
-                   help="plant-velocity: seeded draws of the plant's true parameters")
+    p.add_argument("--seeds", type=int, default=None,
+                   help="plant-velocity: seeded draws of the plant's true parameters (default "
+                   "10); paper-tables: run seeds 0..N-1 and print the per-seed cavity-speed "
+                   "table")
     p.add_argument("--cycles", type=int, default=None,
                    help="mqtt: daemon cycles whose publish latency is measured (default 200)")
     p.add_argument("--backlog", type=int, default=None,
@@ -121,6 +157,12 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="paper-tables: the plant at the centre of the true-parameter prior "
                    "(docs/model.md#true-parameters) (f_true ~ 200, the speeds of the paper's "
                    "Table 1) instead of the seed's draw")
+    p.add_argument("--case", action="append", default=None,
+                   help="closed-loop: one case <clear|mixed|overcast>-<heating|cooling> "
+                   "(repeatable; default all six)")
+    p.add_argument("--controllers", default=None,
+                   help="closed-loop: comma-separated controllers (default rule, mpc, oracle, "
+                   "plant-oracle, mpc-true-weather, mpc-true-state)")
     p.add_argument("--json", type=Path, default=None, help="write the figures as JSON")
     p.set_defaults(handler=run)
 

@@ -22,14 +22,17 @@ from dsfd.weather import WeatherSeries
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """The closed-loop options of ``dsfd simulate``."""
-    from dsfd.sim.closed_loop import CALIBRATIONS, CONTROLLERS
+    from dsfd.sim.choices import CALIBRATIONS, CONTROLLERS
 
     g = p.add_argument_group("closed loop (with --plant truth)")
     g.add_argument("--controller", choices=CONTROLLERS, default=None,
                    help="run calibration and control against the truth plant: the optimiser "
                    "(mpc), the paper's SQP (paper-sqp), the rule-based baseline (rule), one "
                    "fixed command (fixed: --phi-deg/--afr/--or-pct, default 0 deg, regime 10)"
-                   " or the optimiser with perfect information (oracle)")
+                   ", the optimiser with perfect information (oracle), an offline reference "
+                   "that plans by rollouts on the truth plant itself (plant-oracle), or mpc "
+                   "given only the true weather or only the true state (mpc-true-weather, "
+                   "mpc-true-state)")
     g.add_argument("--calibration", choices=CALIBRATIONS, default="online",
                    help="on-line self-calibration (default), frozen --params (offline) or the "
                    "panel defaults (none)")
@@ -72,7 +75,7 @@ def check(args: argparse.Namespace) -> str | None:
         if missing:
             return f"--report: {missing}"
     if args.calibration == "offline" and args.params is None \
-            and args.controller not in ("fixed", "oracle"):
+            and args.controller not in ("fixed", "oracle", "plant-oracle"):
         return "--calibration offline needs --params PARAMS.yaml (made by dsfd calibrate)"
     return None
 

@@ -52,6 +52,7 @@ from dsfd.daemon.hold import HoldUpdate
 from dsfd.daemon.jobs import OffLoopJob
 from dsfd.daemon.logging_setup import get_logger
 from dsfd.daemon.manual import ManualStage
+from dsfd.daemon.memory import trim_heap
 from dsfd.daemon.observer import STATE_SIGNALS, StateEstimate, StateObserver, horizon_end
 from dsfd.daemon.outcome import CycleOutcome
 from dsfd.daemon.quality import QualityChecker
@@ -261,6 +262,7 @@ class Controller:
             log.warning("calibration update abandoned: %s; parameters kept", why)
             return UpdateOutcome(False, why, self.calibration.theta, math.nan, 0)
         outcome = self.calibration.accept(result, now_s=now_s)
+        trim_heap()  # the refit's temporaries are free now; give their pages back
         if outcome.updated:
             log.info("calibration updated", **self.calibration.theta_by_name(),
                      residuals=outcome.n_residuals)

@@ -31,6 +31,7 @@ from dsfd.daemon.clock import Clock, CycleGrid, RealClock, SimulatedClock, Slot
 from dsfd.daemon.hold import position_text
 from dsfd.daemon.logging_setup import bind_contextvars, bound_contextvars, get_logger
 from dsfd.daemon.loop import Controller, CycleOutcome
+from dsfd.daemon.memory import limit_malloc_arenas
 from dsfd.daemon.metrics import MetricsFile
 from dsfd.daemon.notify import Notifier
 from dsfd.daemon.startup import load_for_run, runtime_problems
@@ -270,27 +271,6 @@ class _Daemon:
 def _metrics_file(cfg: PanelConfig) -> MetricsFile | None:
     path = cfg.daemon.metrics_file
     return None if path is None else MetricsFile(path, cfg.panel.id)
-
-
-#: glibc's ``M_ARENA_MAX`` parameter of ``mallopt(3)``.
-_M_ARENA_MAX = -8
-
-
-def limit_malloc_arenas(arenas: int = 1) -> bool:
-    """Cap glibc's malloc arenas (default 8 per core) for the threads started after this.
-
-    The worker threads of the loop (``asyncio.to_thread``: calibration, optimisation, the
-    store) would each take an arena of their own; their fragmentation made ~30 MB of the
-    daemon's resident memory on a 2-core machine; one shared arena costs no measurable speed
-    (the threads spend their time in numpy, not in malloc). Same effect as
-    ``MALLOC_ARENA_MAX`` in the environment; a no-op where the C library is not glibc.
-    """
-    import ctypes
-
-    try:
-        return bool(ctypes.CDLL(None).mallopt(_M_ARENA_MAX, arenas))
-    except (OSError, AttributeError):
-        return False
 
 
 async def serve(opts: RunOptions, cfg: PanelConfig, *, state_dir: Path,

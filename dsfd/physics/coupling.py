@@ -229,14 +229,15 @@ def outlet_ratio(nc: NetworkConstants, lap0: np.ndarray, g_flow: np.ndarray) -> 
 
 
 def with_flow(nc: NetworkConstants, t5: np.ndarray, setup: FlowSetup, lap0: np.ndarray,
-              q0: np.ndarray) -> tuple[np.ndarray, np.ndarray, FlowTerms]:
+              q0: np.ndarray, *, active: np.ndarray | None = None
+              ) -> tuple[np.ndarray, np.ndarray, FlowTerms]:
     """L, q with the airflow evaluated at cavity temperature ``t5`` (arrays of one batch).
 
     The air brings c_p ṁ_in (T_inflow − x5)·k per m² façade into the x5 balance, with
     k = :func:`outlet_ratio` (1 for the paper's well-mixed node; ISO 15099 profile: x5 is
     the column's mean and the air leaves at T_inflow + k (x5 − T_inflow)).
     """
-    pf = path_flows(setup, t5, nc.geom)
+    pf = path_flows(setup, t5, nc.geom, active=active)
     m_in, t_inflow = inflow(setup, pf)
     g_flow = nc.cp_air * m_in / nc.geom.facade_area_m2
     k = outlet_ratio(nc, lap0, g_flow)
@@ -291,18 +292,37 @@ def coupled_step(nc: NetworkConstants, x: np.ndarray, inp: StepInputs, theta: np
     lam, vec, x_star = np.empty((nb, 6)), np.empty((nb, 6, 6)), np.empty((nb, 6))
     x_next, x_mean = np.empty((nb, 6)), np.empty((nb, 6))
 
+    t_all = np.array(x[:, X5] if t5_guess is None else t5_guess, float)
+
     def phi(t5: np.ndarray, rows: np.ndarray) -> np.ndarray:
+        # The elementwise flows of the whole batch cost no more than a subset's (and spare
+        # re-indexing the flow setup every evaluation); rows that have converged keep their
+        # cavity temperature, and only the iterating all-open rows are solved again.
         whole = rows.size == nb
-        sub = setup if whole else setup.take(rows)
-        lap, q, ft = with_flow(nc, t5, sub, lap0 if whole else lap0[rows],
-                               q0 if whole else q0[rows])
+        if whole:
+            t_all[:] = t5
+            active = None
+        else:
+            t_all[rows] = t5
+            active = np.zeros(nb, bool)
+            active[rows] = True
+        lap, q, ft = with_flow(nc, t_all, setup, lap0, q0, active=active)
         pf = ft.flow
-        out_flow[rows], out_rho[rows], out_g[rows] = pf.flow, pf.rho_c, ft.g_adv
-        out_tin[rows], out_k[rows] = ft.t_inflow, ft.outlet_ratio
-        if out_m9 is not None and sub.any_all_open:
-            out_m9[rows[sub.rows_all_open]] = pf.m_all_open
-            if not whole:  # keep the cavity pressure as the start of the next evaluation
-                setup.p_c_warm[rows] = sub.p_c_warm
+        if whole:
+            out_flow[:], out_rho[:], out_g[:] = pf.flow, pf.rho_c, ft.g_adv
+            out_tin[:], out_k[:] = ft.t_inflow, ft.outlet_ratio
+        else:
+            lap, q = lap[rows], q[rows]
+            out_flow[rows], out_rho[rows], out_g[rows] = (pf.flow[rows], pf.rho_c[rows],
+                                                          ft.g_adv[rows])
+            out_tin[rows], out_k[rows] = ft.t_inflow[rows], ft.outlet_ratio[rows]
+        if out_m9 is not None:
+            r9 = setup.rows_all_open
+            if whole:
+                out_m9[r9] = pf.m_all_open
+            else:
+                solved = active[r9]
+                out_m9[r9[solved]] = pf.m_all_open[solved]
         if exact:
             md = modal(lap, q, nc.capacity)
             lam[rows], vec[rows], x_star[rows] = md.lam, md.vec, md.x_steady
@@ -312,8 +332,8 @@ def coupled_step(nc: NetworkConstants, x: np.ndarray, inp: StepInputs, theta: np
         x_next[rows], x_mean[rows] = st.x_next, st.x_mean
         return st.x_next[:, X5]
 
-    t0 = x[:, X5] if t5_guess is None else t5_guess
-    fp = solve_fixed_point(phi, t0, tol=nc.tol_k, max_evals=nc.max_evals, slope=slope_guess)
+    fp = solve_fixed_point(phi, t_all.copy(), tol=nc.tol_k, max_evals=nc.max_evals,
+                           slope=slope_guess)
     if exact:
         md = Modal(lam, vec, 1.0 / np.sqrt(nc.capacity), x_star)
         x_next, x_mean, _ = modal_step(md, x, nc.dt)

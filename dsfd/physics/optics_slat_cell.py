@@ -182,13 +182,36 @@ def cell_response(
     phi: FloatArray, width: float, pitch: float, rho_upper: float, rho_lower: float,
     segments: int, *, cache: bool = True,
 ) -> Response:
-    """Solve (or fetch from the cache) the cell radiosity response for slat angles ``phi``."""
+    """Solve (or fetch from the cache) the cell radiosity response for slat angles ``phi``.
+
+    Repeated angles are solved once: a record's per-row louver angles (the calibration window,
+    a measured file) hold a few grid positions many times, and are answered from the
+    response of their distinct values — which is also what is cached, so that a window that
+    slides every update does not fill the cache with responses of sequences never seen again.
+    """
+    if phi.size > 1:
+        distinct, inverse = np.unique(phi.ravel(), return_inverse=True)
+        if distinct.size < phi.size:
+            once = cell_response(distinct, width, pitch, rho_upper, rho_lower, segments,
+                                 cache=cache)
+            return _expanded(once, inverse, phi.shape)
     if cache and phi.size <= _CACHE_MAX_SIZE:
         key = np.ascontiguousarray(phi.ravel(), dtype=float)  # ravel: keep 0-d via phi.shape
         cached = _cached_grid if phi.size > 1 else _cached_single
         return cached(key.tobytes(), phi.shape, float(width), float(pitch), float(rho_upper),
                       float(rho_lower), int(segments))
     return _solve_response(phi, width, pitch, rho_upper, rho_lower, segments)
+
+
+def _expanded(resp: Response, index: np.ndarray, shape: tuple[int, ...]) -> Response:
+    """``resp`` (for distinct angles) at the angles ``distinct[index]``, shaped ``shape``."""
+
+    def take(a: FloatArray) -> FloatArray:
+        return a[index].reshape(*shape, *a.shape[1:])
+
+    cell = resp.cell._replace(**{name: take(getattr(resp.cell, name))
+                                 for name in Cell._fields if name != "length"})
+    return Response(cell, take(resp.fate), take(resp.diffuse))
 
 
 def slat_cell_view_factors(

@@ -211,8 +211,14 @@ class PathFlow(NamedTuple):
     m_all_open: np.ndarray
 
 
-def path_flows(setup: FlowSetup, t5_k: np.ndarray, geom: AirflowGeometry) -> PathFlow:
+def path_flows(setup: FlowSetup, t5_k: np.ndarray, geom: AirflowGeometry, *,
+               active: np.ndarray | None = None) -> PathFlow:
     """Flows of a prepared batch with the cavity air at ``t5_k`` [K].
+
+    ``active`` (B,) bool, optional: the all-open rows outside it are not solved (their
+    ``m_all_open`` rows are zero and their warm start is kept) — the coupling re-evaluates
+    the whole batch's elementwise flows, which costs no more than a subset's, but solves the
+    one-node problem only for the rows still iterating.
 
     Notes
     -----
@@ -241,6 +247,12 @@ def path_flows(setup: FlowSetup, t5_k: np.ndarray, geom: AirflowGeometry) -> Pat
     flow *= s.path_gain
     if s.any_all_open:
         r9 = s.rows_all_open
+        m9 = np.zeros((r9.size, 4))
+        if active is not None:
+            solve = active[r9]
+            r9 = r9[solve]
+            if r9.size == 0:
+                return PathFlow(flow, rho_c, m9)
         rho9 = rho_c[r9]
         warm = s.p_c_warm[r9]
         p_b9 = s.p_b[r9]
@@ -256,7 +268,10 @@ def path_flows(setup: FlowSetup, t5_k: np.ndarray, geom: AirflowGeometry) -> Pat
         warm[:, _W_PC], warm[:, _W_RHO], warm[:, _W_DRHO] = sol.p_c, rho9, sol.dpc_drho
         warm[:, _W_PB], warm[:, _W_DPB] = p_b9, sol.dpc_dpb
         s.p_c_warm[r9] = warm
-        m9 = sol.m_dot
+        if active is None:
+            m9 = sol.m_dot
+        else:
+            m9[solve] = sol.m_dot
     else:
         m9 = _EMPTY4
     return PathFlow(flow, rho_c, m9)

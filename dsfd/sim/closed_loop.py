@@ -14,10 +14,17 @@ Controllers:
 * ``fixed`` — no control: one command held throughout (default louver 0°, dampers closed);
 * ``oracle`` — the ``mpc`` optimiser with perfect information: the plant's true mid-height
   state instead of the observer, the true weather of the horizon instead of persistence, and
-  the plant's own parameters mapped to the lumped model
-  (:meth:`~dsfd.sim.plant.config.TrueParameters.lumped_theta`) instead of a calibration.
+  the plant's own parameters mapped to the lumped model (:func:`oracle_theta`) instead of a
+  calibration.
   It bounds what better information can buy the optimiser; it is not a global optimum
-  (the optimiser still plans on the lumped model over 15 minutes).
+  (the optimiser still plans on the lumped model over 15 minutes);
+* ``plant-oracle`` — an offline reference that plans on the truth plant itself: every
+  decision rolls candidate commands out on copies of the plant from its true state with the
+  true weather (:mod:`dsfd.sim.oracle_search`), within the same actuator grid, horizon, move
+  penalty and safety pipeline;
+* ``mpc-true-weather``, ``mpc-true-state`` — ``mpc`` (with its calibration) given one piece
+  of the oracle's information: the true weather of the horizon, or the plant's true state.
+  They split what the oracle gains into forecast, state estimate and model.
 
 Calibration: ``online`` (the daemon's on-line self-calibration), ``offline`` (θ̂ from a
 ``dsfd calibrate`` parameter file, frozen) or ``none`` (the panel's defaults, frozen).
@@ -46,6 +53,7 @@ import numpy as np
 from dsfd.config.panel import PanelConfig
 from dsfd.config.parameters import N_PARAMS
 from dsfd.control.objective import is_heating
+from dsfd.control.optimiser import ControlProblem, Decision
 from dsfd.daemon.calibration import CalibrationStage
 from dsfd.daemon.clock import SimulatedClock, Slot
 from dsfd.daemon.loop import Controller
@@ -55,13 +63,17 @@ from dsfd.drivers.base import Command as DriverCommand
 from dsfd.drivers.simulated import SimulatedDriver
 from dsfd.estimation.params import ParameterSpace, full_vector
 from dsfd.estimation.state import CalibrationState
+from dsfd.physics.airflow import ET, IB
 from dsfd.physics.boundary import WeatherInputs
 from dsfd.physics.constants import T_ZERO
 from dsfd.physics.forcing import Forcing, facade_forcing
 from dsfd.physics.model import LumpedModel
 from dsfd.physics.solar import solar_position
+from dsfd.sim.choices import CALIBRATIONS, CONTROLLERS, TRUE_THETA
+from dsfd.sim.oracle_search import Candidate, PlantOracle, SearchSettings, room_objective_j
 from dsfd.sim.plant.actuators import Command
 from dsfd.sim.plant.config import PlantOptions
+from dsfd.sim.plant.flow import opening_resistance
 from dsfd.sim.plant.model import ROOM_FLOWS
 from dsfd.sim.plant.plant import Plant
 from dsfd.sim.replay import at_site, step_window
@@ -72,8 +84,13 @@ from dsfd.weather.sky import sky_conditions
 __all__ = ["CALIBRATIONS", "CONTROLLERS", "ClosedLoopResult", "ClosedLoopSettings",
            "run_closed_loop"]
 
-CONTROLLERS = ("mpc", "paper-sqp", "rule", "fixed", "oracle")
-CALIBRATIONS = ("online", "offline", "none")
+
+#: Stage budgets of a closed-loop run [s]. The daemon's budgets are wall-clock limits; the
+#: simulated clock does not wait for the wall clock, so on a loaded machine they would turn
+#: slow calibration updates into abandoned ones and change the energy figures with the
+#: machine's load. A run lifts them and counts the stages that took longer than the panel's
+#: budgets instead (``late_decisions``, ``late_calibrations``).
+SIM_BUDGET_S = 1e6
 #: The uncontrolled reference: horizontal slats, all dampers closed (a buffer façade).
 DEFAULT_FIXED = Command(0.0, 10, 100.0)
 J_PER_KWH = 3.6e6
@@ -102,9 +119,12 @@ class ClosedLoopSettings:
         The command of ``controller="fixed"``.
     options : PlantOptions, optional
         Plant switches (default: the full stratified plant).
+    search : SearchSettings
+        What ``plant-oracle`` rolls out.
     """
 
-    controller: Literal["mpc", "paper-sqp", "rule", "fixed", "oracle"] = "mpc"
+    controller: Literal["mpc", "paper-sqp", "rule", "fixed", "oracle", "plant-oracle",
+                        "mpc-true-weather", "mpc-true-state"] = "mpc"
     calibration: Literal["online", "offline", "none"] = "online"
     seed: int = 1
     hours: float | None = None
@@ -112,6 +132,7 @@ class ClosedLoopSettings:
     offline_theta: np.ndarray | None = None
     fixed_command: Command = DEFAULT_FIXED
     options: PlantOptions | None = None
+    search: SearchSettings = field(default_factory=SearchSettings)
 
     def check(self) -> None:
         """Raise ValueError for an impossible combination (the message says what to do)."""
@@ -120,7 +141,7 @@ class ClosedLoopSettings:
         if self.calibration not in CALIBRATIONS:
             raise ValueError(f"calibration {self.calibration!r}: choose one of {CALIBRATIONS}")
         if (self.calibration == "offline" and self.offline_theta is None
-                and self.controller not in ("fixed", "oracle")):
+                and self.controller not in ("fixed", *TRUE_THETA)):
             raise ValueError("calibration offline needs frozen parameters: pass --params "
                              "PARAMS.yaml (made by dsfd calibrate)")
 
@@ -143,6 +164,8 @@ class ClosedLoopResult:
     final_theta: np.ndarray
     wall_s: float
     site: tuple[float, float] = (0.0, 0.0)  # latitude, longitude [deg]
+    #: Stages slower than the panel's budgets (lifted in a run, see SIM_BUDGET_S).
+    late: dict[str, int] = field(default_factory=dict)
     notes: tuple[str, ...] = field(default_factory=tuple)
 
     @property
@@ -152,9 +175,7 @@ class ClosedLoopResult:
     def j_per_cycle(self) -> np.ndarray:
         """Objective of each cycle's interval [J] (docs/model.md#control-objective, the cycle's
         mode)."""
-        q = self.heat_j
-        gains = q["q_cv_rd"] + q["q_sol_trans"] + q["q_air"]
-        return np.where(self.heating, -(gains + q["q_da"]), gains - q["q_da"])
+        return room_objective_j(self.heat_j, self.heating)
 
     def louver_moves(self) -> int:
         """Commanded louver angle changes."""
@@ -212,6 +233,8 @@ class ClosedLoopResult:
             "decide_ms_median": float(np.median(d)) if d.size else math.nan,
             "decide_ms_p99": float(np.percentile(d, 99)) if d.size else math.nan,
             "calibration_updates": self.calibration_updates,
+            "late_decisions": self.late.get("late_decisions", 0),
+            "late_calibrations": self.late.get("late_calibrations", 0),
             "by_condition": self.by_condition(*self.site),
             "final_theta": [float(v) for v in self.final_theta[:N_PARAMS]],
             "wall_s": self.wall_s,
@@ -235,23 +258,104 @@ class _FrozenCalibration(CalibrationStage):
 
 
 class _OracleController(Controller):
-    """The controller with perfect information (see the module docstring)."""
+    """The controller with the plant's true state and/or true weather (module docstring)."""
 
     plant: Plant
+    true_state: bool = True
+    true_weather: bool = True
 
     def _estimate(self, checked, weather: CycleWeather, current: DriverCommand | None
                   ) -> StateEstimate:
+        if not self.true_state:
+            return super()._estimate(checked, weather, current)
         x = np.asarray(self.plant.true_state().x_mid_k, float)
         return StateEstimate(x_k=x, age_cycles=(0,) * 5, usable=True)
 
     def _forecast(self, measured: WeatherInputs, now_s: float) -> Forcing:
+        if not self.true_weather:
+            return super()._forecast(measured, now_s)
         return facade_forcing(self.cfg, self.plant.perfect_forecast(self.cfg.control.horizon_steps))
 
 
+class _PlantOracleController(_OracleController):
+    """Decisions by plant rollouts (:class:`~dsfd.sim.oracle_search.PlantOracle`)."""
+
+    search: PlantOracle
+
+    def _optimiser(self, problem: ControlProblem) -> Callable[[], Decision]:
+        current = None
+        if problem.previous_phi_deg is not None and problem.previous_afr is not None:
+            current = Candidate.of(problem.previous_phi_deg, problem.previous_afr,
+                                   problem.previous_or_pct or 0.0)
+        return lambda: self.search.decide(self.plant, problem, current=current,
+                                          feasible=self._as_applied(current))
+
+    def _as_applied(self, current: Candidate | None) -> Callable[[Candidate], Candidate]:
+        """What the safety pipeline's rate stage would let through this cycle (the louver
+        move interval and the OR dead-band): the command the plant would really get."""
+        s = self.cfg.safety
+        last = self.safety.last_louver_move_s
+        louver_held = (current is not None and last is not None
+                       and self.clock.monotonic() - last < s.min_louver_move_interval_s)
+
+        def applied(c: Candidate) -> Candidate:
+            if current is None:
+                return c
+            phi = current.phi_deg if louver_held else c.phi_deg
+            or_pct = c.or_pct
+            if (c.afr == current.afr and or_pct != current.or_pct
+                    and abs(or_pct - current.or_pct) < s.or_deadband_pct):
+                or_pct = current.or_pct
+            return Candidate.of(phi, c.afr, or_pct)
+
+        return applied
+
+
+def oracle_theta(cfg: PanelConfig, plant: Plant) -> np.ndarray:
+    """The plant's parameters on the lumped model's terms, for the controllers that plan with
+    them (``oracle``, ``plant-oracle``'s candidate ranking).
+
+    :meth:`~dsfd.sim.plant.config.TrueParameters.lumped_theta`, except for a plant whose
+    diagonal regimes are orifices (the full plant): there the lumped power law's c and n have
+    no true value, and the config's defaults (c 0.05, n 0.6) gave a regime-5 flow less than
+    half the plant's. They are the orifice law's instead: n = ½ and c = √(2/(ρ K)) with K the
+    plant's own diagonal path resistance at OR = 1 (both dampers and the cavity loss
+    f_true + K_L(φ), docs/model.md#plant-airflow), averaged over the louver positions (the
+    power law has no louver term).
+    """
+    theta = plant.params.lumped_theta(cfg)
+    if plant.options.diagonal_flow != "orifice":
+        return theta
+    model = plant.model
+    rho = cfg.model.air_density_kgm3
+    coefs = []
+    for phi in model.phis:
+        k_l = model.louver_terms(float(phi))[1]
+        k = opening_resistance(model.openings, [1.0] * 4, [True] * 4, plant.params.f, k_l)
+        coefs.append(math.sqrt(2.0 / (rho * (k[IB] + k[ET]))))
+    theta[7], theta[8] = float(np.mean(coefs)), 0.5
+    return theta
+
+
+#: Controller classes and the information they get: (class, true state, true weather).
+_CONTROLLER_CLASSES: dict[str, tuple[type[Controller], bool, bool]] = {
+    "oracle": (_OracleController, True, True),
+    "plant-oracle": (_PlantOracleController, True, True),
+    "mpc-true-weather": (_OracleController, False, True),
+    "mpc-true-state": (_OracleController, True, False),
+}
+
+
 def _controller_config(cfg: PanelConfig, controller: str) -> PanelConfig:
-    optimiser = {"mpc": "mpc", "oracle": "mpc", "paper-sqp": "paper-sqp", "rule": "rule"}
-    return dataclasses.replace(cfg, control=dataclasses.replace(
-        cfg.control, optimiser=optimiser[controller]))
+    """The panel as the run's controller sees it: its optimiser, and the stage budgets lifted
+    (:data:`SIM_BUDGET_S`)."""
+    optimiser = {"mpc": "mpc", "oracle": "mpc", "paper-sqp": "paper-sqp", "rule": "rule",
+                 "plant-oracle": "mpc", "mpc-true-weather": "mpc", "mpc-true-state": "mpc"}
+    control = dataclasses.replace(cfg.control, optimiser=optimiser.get(controller, "rule"),
+                                  time_budget_s=SIM_BUDGET_S)
+    daemon = dataclasses.replace(cfg.daemon, calibrate_budget_s=SIM_BUDGET_S,
+                                 store_budget_s=SIM_BUDGET_S)
+    return dataclasses.replace(cfg, control=control, daemon=daemon)
 
 
 def run_closed_loop(cfg: PanelConfig, series: WeatherSeries, settings: ClosedLoopSettings, *,
@@ -289,16 +393,15 @@ def run_closed_loop(cfg: PanelConfig, series: WeatherSeries, settings: ClosedLoo
 async def _run(cfg: PanelConfig, plant: Plant, settings: ClosedLoopSettings, start: float,
                n: int, state_dir: Path, progress: Callable[[int, int], None] | None
                ) -> ClosedLoopResult:
-    ctrl_cfg = _controller_config(cfg, settings.controller) \
-        if settings.controller != "fixed" else cfg
+    ctrl_cfg = _controller_config(cfg, settings.controller)
     model = LumpedModel(ctrl_cfg)
-    if settings.controller == "oracle":
-        theta = plant.params.lumped_theta(cfg)
+    if settings.controller in TRUE_THETA:
+        theta = oracle_theta(cfg, plant)
     elif settings.calibration == "offline":
         theta = settings.offline_theta
     else:
         theta = None
-    if settings.controller != "oracle" and settings.calibration == "online":
+    if settings.controller not in TRUE_THETA and settings.calibration == "online":
         calibration = CalibrationStage(ctrl_cfg, model, state_dir=state_dir)
     else:
         calibration = _FrozenCalibration(ctrl_cfg, model, state_dir=state_dir, theta=theta)
@@ -308,12 +411,17 @@ async def _run(cfg: PanelConfig, plant: Plant, settings: ClosedLoopSettings, sta
     store.begin_run(panel=cfg.panel.id, mode=f"closed-loop simulation, controller "
                     f"{settings.controller}, calibration {settings.calibration}",
                     version="sim", config_path=None, config=dataclasses.asdict(ctrl_cfg))
-    cls = _OracleController if settings.controller == "oracle" else Controller
+    cls, true_state, true_weather = _CONTROLLER_CLASSES.get(settings.controller,
+                                                            (Controller, False, False))
     controller = cls(ctrl_cfg, driver=driver, clock=clock, store=store,
                      calibration=calibration, write_enabled=True,
                      plant_heat_j=plant.room_heat_j)
+    controller.io.read_budget_s = controller.io.write_budget_s = SIM_BUDGET_S
     if isinstance(controller, _OracleController):
         controller.plant = plant
+        controller.true_state, controller.true_weather = true_state, true_weather
+    if isinstance(controller, _PlantOracleController):
+        controller.search = PlantOracle(ctrl_cfg, settings=settings.search)
     heat: dict[str, list[float]] = {k: [] for k in ROOM_FLOWS}
     heating: list[bool] = []
     ghi: list[float] = []
@@ -321,6 +429,7 @@ async def _run(cfg: PanelConfig, plant: Plant, settings: ClosedLoopSettings, sta
     methods: Counter[str] = Counter()
     decide_ms: list[float] = []
     updates = 0
+    late: Counter[str] = Counter()
     wall = time.perf_counter()
     try:
         for i in range(n):
@@ -334,6 +443,9 @@ async def _run(cfg: PanelConfig, plant: Plant, settings: ClosedLoopSettings, sta
                 method, mode = out.method, out.heating
                 ms = out.timings_ms.get("decide", math.nan)
                 updates += int(out.calibration is not None and out.calibration.updated)
+                late["late_decisions"] += ms > 1e3 * cfg.control.time_budget_s
+                late["late_calibrations"] += (out.timings_ms.get("calibrate", 0.0)
+                                              > 1e3 * cfg.daemon.calibrate_budget_s)
             before = plant.room_heat_j()
             plant.advance(float(cfg.model.step_s))  # the interval the command holds
             after = plant.room_heat_j()
@@ -359,7 +471,7 @@ async def _run(cfg: PanelConfig, plant: Plant, settings: ClosedLoopSettings, sta
         heat_j={k: np.asarray(v) for k, v in heat.items()}, heating=np.asarray(heating),
         ghi_wm2=np.asarray(ghi, float),
         commands=commands, methods=methods, decide_ms=np.asarray(decide_ms, float),
-        calibration_updates=updates, final_theta=calibration.theta,
+        calibration_updates=updates, final_theta=calibration.theta, late=dict(late),
         wall_s=time.perf_counter() - wall,
         site=(cfg.site.latitude_deg, cfg.site.longitude_deg),
         notes=(f"truth plant seed {settings.seed}; true h multipliers "

@@ -132,3 +132,18 @@ def test_a_start_within_one_horizon_of_the_data_end_is_refused(suwon, rmis_raw, 
                                   options=FAST)
     with pytest.raises(ValueError, match="within one control horizon"):
         run_closed_loop(suwon, rmis_raw, settings)
+
+
+def test_a_run_lifts_the_wall_clock_budgets_and_counts_what_was_late(suwon, rmis_raw, rmis):
+    """The simulated clock does not wait: a calibration update slower than the panel's budget
+    is still applied (on a loaded machine it would otherwise be abandoned and the energy
+    figures would depend on the load), and counted as late."""
+    tight = dataclasses.replace(suwon, daemon=dataclasses.replace(
+        suwon.daemon, calibrate_budget_s=1e-4))
+    start = day_start(rmis, 1) + 10.0 * HOUR
+    settings = ClosedLoopSettings(controller="mpc", calibration="online", hours=1.15,
+                                  start_s=start, options=FAST, seed=3)
+    res = run_closed_loop(tight, rmis_raw, settings)
+    assert res.calibration_updates >= 1
+    assert res.late["late_calibrations"] >= 1
+    assert res.summary()["late_calibrations"] == res.late["late_calibrations"]

@@ -1,0 +1,205 @@
+"""``dsfd bench closed-loop``: how much of the achievable saving the controller gets.
+
+For each case — a clear, a mixed and an overcast day of the winter weather, each in the
+heating objective and in the synthetic cooling period (the README's closed-loop case:
+outdoor air +25 K, room 25 °C, cooling objective) — the same truth plant (same seed) runs
+the same window under every controller of :data:`CONTROLLERS`:
+
+* ``rule`` (the baseline), ``mpc`` (on-line calibration, persistence forecast);
+* ``oracle``: the optimiser with the true state, the true weather and the plant's
+  parameters mapped to the lumped model (it still plans on the lumped model);
+* ``plant-oracle``: decisions by rollouts on the truth plant itself
+  (:mod:`dsfd.sim.oracle_search`) — the reference the controller is judged by;
+* ``mpc-true-weather``, ``mpc-true-state``: ``mpc`` given one piece of the oracle's
+  information, to split the shortfall into forecast, state estimate and model.
+
+Every run starts a warm-up before the scored day — a quarter of the scored duration, at most
+``warmup_h`` — clipped to the start of the record, so the on-line calibration has data
+behind it as it would in service; only the scored cycles are counted. The figure of merit
+per case is
+
+    mpc_share_of_plant_oracle_saving = (J_rule − J_mpc) / (J_rule − J_plant-oracle)
+
+(1 = the controller gets everything the plant oracle gets). Days are picked from the
+weather by the daytime clearness index k_t of each whole local solar day
+(:func:`classify_days`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from dsfd.config.panel import PanelConfig
+from dsfd.physics.solar import extraterrestrial_irradiance, solar_position
+from dsfd.sim.closed_loop import (
+    J_PER_KWH,
+    ClosedLoopResult,
+    ClosedLoopSettings,
+    run_closed_loop,
+)
+from dsfd.sim.replay import at_site
+from dsfd.weather import WeatherSeries
+
+__all__ = ["CASES", "CONTROLLERS", "DayClass", "bench_closed_loop", "classify_days", "report"]
+
+CONTROLLERS = ("rule", "mpc", "oracle", "plant-oracle", "mpc-true-weather", "mpc-true-state")
+SKIES = ("clear", "mixed", "overcast")
+SEASONS = ("heating", "cooling")
+CASES = tuple(f"{sky}-{season}" for sky in SKIES for season in SEASONS)
+#: The synthetic cooling period of the README's closed-loop section.
+COOLING_T_OUT_OFFSET_K = 25.0
+COOLING_ROOM_C = 25.0
+WARMUP_H = 6.0
+#: Clearness-index classes of the paper's Figure 11 (as ClosedLoopResult.conditions).
+KT_CLEAR, KT_OVERCAST = 0.55, 0.3
+
+
+@dataclass(frozen=True)
+class DayClass:
+    """One whole local solar day of a weather series and its sky."""
+
+    start_s: float  # UTC of local solar midnight [s]
+    clear_share: float  # daytime samples with k_t > 0.55
+    mixed_share: float
+    overcast_share: float  # k_t < 0.3
+
+
+def classify_days(series: WeatherSeries, cfg: PanelConfig) -> dict[str, DayClass]:
+    """The clearest, the most mixed and the most overcast whole day of ``series`` at the
+    panel's site (daytime: sun above 5° and GHI ≥ 20 W/m2; local solar midnight from the
+    site's longitude). Each day is used once: overcast first, then clear, then mixed."""
+    site = at_site(series, cfg)
+    t = site.time_s
+    sun = solar_position(t, cfg.site.latitude_deg, cfg.site.longitude_deg)
+    cos_z = np.cos(np.radians(sun.zenith_deg))
+    kt = site.ghi_wm2 / np.maximum(extraterrestrial_irradiance(t) * cos_z, 1e-9)
+    up = (sun.elevation_deg >= 5.0) & (site.ghi_wm2 >= 20.0)
+    offset = cfg.site.longitude_deg / 15.0 * 3600.0
+    day = np.floor((t + offset) / 86400.0)
+    first, last = site.coverage_s
+    days: list[DayClass] = []
+    for d in np.unique(day):
+        start = d * 86400.0 - offset
+        if start < first - 600.0 or start + 86400.0 > last:
+            continue  # not a whole day of data
+        k = kt[(day == d) & up]
+        if k.size == 0:
+            continue
+        days.append(DayClass(float(start), float(np.mean(k > KT_CLEAR)),
+                             float(np.mean((k >= KT_OVERCAST) & (k <= KT_CLEAR))),
+                             float(np.mean(k < KT_OVERCAST))))
+    if len(days) < 3:
+        raise ValueError(f"weather {series.source!r} has {len(days)} whole day(s) with daylight "
+                         "at the site; the bench needs three (clear, mixed, overcast)")
+    out: dict[str, DayClass] = {}
+    for sky, key in (("overcast", "overcast_share"), ("clear", "clear_share"),
+                     ("mixed", "mixed_share")):
+        left = [dc for dc in days if dc not in out.values()]
+        out[sky] = max(left, key=lambda dc, key=key: getattr(dc, key))
+    return out
+
+
+def _case_config(cfg: PanelConfig, series: WeatherSeries, season: str
+                 ) -> tuple[PanelConfig, WeatherSeries]:
+    if season == "heating":
+        return (dataclasses.replace(cfg, control=dataclasses.replace(cfg.control,
+                                                                     mode="heating")), series)
+    cfg = dataclasses.replace(cfg, control=dataclasses.replace(cfg.control, mode="cooling"),
+                              room=dataclasses.replace(cfg.room, t_in_c=COOLING_ROOM_C))
+    note = f"SYNTHETIC: measured outdoor air shifted by {COOLING_T_OUT_OFFSET_K:+g} K"
+    return cfg, dataclasses.replace(series, t_out_c=series.t_out_c + COOLING_T_OUT_OFFSET_K,
+                                    notes=(*series.notes, note))
+
+
+def _scored(result: ClosedLoopResult, from_s: float) -> dict[str, float]:
+    """J and heat terms [kWh] of the cycles that start at or after ``from_s``."""
+    t = result.start_s + np.arange(result.cycles) * result.step_s
+    keep = t >= from_s - 1e-6
+    j = result.j_per_cycle()[keep].sum() / J_PER_KWH
+    out = {"J_kwh": float(j)}
+    out.update({f"{k}_kwh": float(v[keep].sum() / J_PER_KWH) for k, v in result.heat_j.items()})
+    phis = np.array([c.phi_deg for c in result.commands])[keep]
+    days = keep.sum() * result.step_s / 86400.0
+    out["louver_moves_per_day"] = float(np.count_nonzero(np.diff(phis)) / days) if days else 0.0
+    d = result.decide_ms[keep]
+    d = d[np.isfinite(d)]
+    out["decide_ms_median"] = float(np.median(d)) if d.size else float("nan")
+    return out
+
+
+def _share(j: dict[str, float], name: str, ref: str = "plant-oracle") -> float:
+    saving = j["rule"] - j[ref]
+    return (j["rule"] - j[name]) / saving if saving else float("nan")
+
+
+def bench_closed_loop(cfg: PanelConfig, series: WeatherSeries, *, days: float = 1.0,
+                      seed: int = 1, cases: Sequence[str] = CASES,
+                      controllers: Sequence[str] = CONTROLLERS, warmup_h: float = WARMUP_H,
+                      progress: Callable[[str], None] | None = None) -> dict[str, float]:
+    """Run every controller on every case; flat figures ``<case>.<controller>.<figure>``
+    and ``<case>.mpc_share_of_plant_oracle_saving`` (and the other shares)."""
+    unknown = sorted(set(cases) - set(CASES))
+    if unknown:
+        raise ValueError(f"unknown case(s) {unknown}; choose from {', '.join(CASES)}")
+    missing = {"rule", "mpc", "plant-oracle"} - set(controllers)
+    if missing:
+        raise ValueError(f"the shares need the controllers {sorted(missing)} too")
+    skies = classify_days(series, cfg)
+    first = at_site(series, cfg).coverage_s[0]
+    fig: dict[str, float] = {"seed": float(seed), "days": float(days)}
+    for case in cases:
+        sky, season = case.split("-")
+        day = skies[sky]
+        start = max(first, day.start_s - min(warmup_h, 6.0 * days) * 3600.0)
+        start = float(np.ceil(start / 60.0) * 60.0)
+        hours = (day.start_s - start) / 3600.0 + 24.0 * days
+        ccfg, cseries = _case_config(cfg, series, season)
+        fig[f"{case}.day_start_s"] = day.start_s
+        fig[f"{case}.warmup_h"] = (day.start_s - start) / 3600.0
+        j: dict[str, float] = {}
+        for name in controllers:
+            wall = time.perf_counter()
+            res = run_closed_loop(ccfg, cseries, ClosedLoopSettings(
+                controller=name, calibration="online", seed=seed, hours=hours, start_s=start))
+            scored = _scored(res, day.start_s)
+            for key, value in scored.items():
+                fig[f"{case}.{name}.{key}"] = value
+            fig[f"{case}.{name}.wall_s"] = time.perf_counter() - wall
+            j[name] = scored["J_kwh"]
+            if progress is not None:
+                progress(f"{case}: {name} J {scored['J_kwh']:+.3f} kWh "
+                         f"({time.perf_counter() - wall:.0f} s)")
+        for name in controllers:
+            if name not in ("rule", "plant-oracle"):
+                fig[f"{case}.{name.replace('-', '_')}_share_of_plant_oracle_saving"] = \
+                    _share(j, name)
+    return fig
+
+
+def report(fig: dict[str, float]) -> str:
+    """One table per case: J and heat terms per controller, and the shares (text)."""
+    cases = [c for c in CASES if f"{c}.day_start_s" in fig]
+    lines = [f"Closed loop on the truth plant (seed {fig['seed']:g}), {fig['days']:g} scored "
+             "day(s) per case; share = (J_rule - J) / (J_rule - J_plant-oracle)"]
+    for case in cases:
+        start = fig[f"{case}.day_start_s"]
+        day = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime(start))
+        lines += ["", f"{case}: local day from {day} (warm-up {fig[f'{case}.warmup_h']:.1f} h)",
+                  f"{'controller':<18}{'J':>9}{'Q_cv,rd':>9}{'Q_sol':>9}{'Q_air':>9}"
+                  f"{'Q_DA':>9}{'moves/d':>9}{'share':>8}  [kWh]"]
+        names = [k.split(".")[1] for k in fig if k.startswith(f"{case}.")
+                 and k.endswith(".J_kwh")]
+        for name in names:
+            p = f"{case}.{name}."
+            share = fig.get(f"{case}.{name.replace('-', '_')}_share_of_plant_oracle_saving")
+            lines.append(f"{name:<18}{fig[p + 'J_kwh']:9.3f}{fig[p + 'q_cv_rd_kwh']:9.3f}"
+                         f"{fig[p + 'q_sol_trans_kwh']:9.3f}{fig[p + 'q_air_kwh']:9.3f}"
+                         f"{fig[p + 'q_da_kwh']:9.3f}{fig[p + 'louver_moves_per_day']:9.1f}"
+                         + (f"{share:8.1%}" if share is not None else f"{'':>8}"))
+    return "\n".join(lines)
+
