@@ -142,6 +142,11 @@ class PlantProcess:
         """Heat into the room since the start [J] by term, and the hours it covers [h]."""
         return self._call("room_heat")
 
+    def room_heat_now(self) -> dict[str, float] | None:
+        """Heat into the room since the start [J] by term; None while a call that the read
+        budget abandoned is still in flight (one pipe, one caller at a time)."""
+        return None if self.driver.busy else self.room_heat()[0]
+
     @property
     def driver(self) -> SimulatedDriver:
         """The daemon's driver of this plant (one per plant)."""
