@@ -51,7 +51,7 @@ from typing import Literal
 import numpy as np
 
 from dsfd.config.panel import PanelConfig
-from dsfd.config.parameters import N_PARAMS
+from dsfd.config.parameters import N_PARAMS, Param
 from dsfd.control.objective import is_heating
 from dsfd.control.optimiser import ControlProblem, Decision
 from dsfd.daemon.calibration import CalibrationStage
@@ -333,7 +333,7 @@ def oracle_theta(cfg: PanelConfig, plant: Plant) -> np.ndarray:
         k_l = model.louver_terms(float(phi))[1]
         k = opening_resistance(model.openings, [1.0] * 4, [True] * 4, plant.params.f, k_l)
         coefs.append(math.sqrt(2.0 / (rho * (k[IB] + k[ET]))))
-    theta[7], theta[8] = float(np.mean(coefs)), 0.5
+    theta[Param.C], theta[Param.N] = float(np.mean(coefs)), 0.5
     return theta
 
 
@@ -390,27 +390,27 @@ def run_closed_loop(cfg: PanelConfig, series: WeatherSeries, settings: ClosedLoo
         return asyncio.run(_run(cfg, plant, settings, start, n, Path(tmp), progress))
 
 
-async def _run(cfg: PanelConfig, plant: Plant, settings: ClosedLoopSettings, start: float,
-               n: int, state_dir: Path, progress: Callable[[int, int], None] | None
-               ) -> ClosedLoopResult:
-    ctrl_cfg = _controller_config(cfg, settings.controller)
+def _calibration_for(ctrl_cfg: PanelConfig, cfg: PanelConfig, plant: Plant,
+                     settings: ClosedLoopSettings, state_dir: Path
+                     ) -> CalibrationStage | _FrozenCalibration:
+    """The run's calibration: on-line, or frozen at the oracle's, the off-line or the
+    panel's parameters."""
     model = LumpedModel(ctrl_cfg)
+    if settings.controller not in TRUE_THETA and settings.calibration == "online":
+        return CalibrationStage(ctrl_cfg, model, state_dir=state_dir)
     if settings.controller in TRUE_THETA:
         theta = oracle_theta(cfg, plant)
     elif settings.calibration == "offline":
         theta = settings.offline_theta
     else:
         theta = None
-    if settings.controller not in TRUE_THETA and settings.calibration == "online":
-        calibration = CalibrationStage(ctrl_cfg, model, state_dir=state_dir)
-    else:
-        calibration = _FrozenCalibration(ctrl_cfg, model, state_dir=state_dir, theta=theta)
-    clock = SimulatedClock(start_utc_s=start)
-    driver = SimulatedDriver(plant)
-    store = Store.open(state_dir)
-    store.begin_run(panel=cfg.panel.id, mode=f"closed-loop simulation, controller "
-                    f"{settings.controller}, calibration {settings.calibration}",
-                    version="sim", config_path=None, config=dataclasses.asdict(ctrl_cfg))
+    return _FrozenCalibration(ctrl_cfg, model, state_dir=state_dir, theta=theta)
+
+
+def _controller_for(ctrl_cfg: PanelConfig, plant: Plant, settings: ClosedLoopSettings, *,
+                    driver: SimulatedDriver, clock: SimulatedClock, store: Store,
+                    calibration: CalibrationStage | _FrozenCalibration) -> Controller:
+    """The daemon's cycle for ``settings.controller``, given the information it may use."""
     cls, true_state, true_weather = _CONTROLLER_CLASSES.get(settings.controller,
                                                             (Controller, False, False))
     controller = cls(ctrl_cfg, driver=driver, clock=clock, store=store,
@@ -422,6 +422,22 @@ async def _run(cfg: PanelConfig, plant: Plant, settings: ClosedLoopSettings, sta
         controller.true_state, controller.true_weather = true_state, true_weather
     if isinstance(controller, _PlantOracleController):
         controller.search = PlantOracle(ctrl_cfg, settings=settings.search)
+    return controller
+
+
+async def _run(cfg: PanelConfig, plant: Plant, settings: ClosedLoopSettings, start: float,
+               n: int, state_dir: Path, progress: Callable[[int, int], None] | None
+               ) -> ClosedLoopResult:
+    ctrl_cfg = _controller_config(cfg, settings.controller)
+    calibration = _calibration_for(ctrl_cfg, cfg, plant, settings, state_dir)
+    clock = SimulatedClock(start_utc_s=start)
+    driver = SimulatedDriver(plant)
+    store = Store.open(state_dir)
+    store.begin_run(panel=cfg.panel.id, mode=f"closed-loop simulation, controller "
+                    f"{settings.controller}, calibration {settings.calibration}",
+                    version="sim", config_path=None, config=dataclasses.asdict(ctrl_cfg))
+    controller = _controller_for(ctrl_cfg, plant, settings, driver=driver, clock=clock,
+                                 store=store, calibration=calibration)
     heat: dict[str, list[float]] = {k: [] for k in ROOM_FLOWS}
     heating: list[bool] = []
     ghi: list[float] = []
