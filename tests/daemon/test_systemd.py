@@ -10,6 +10,7 @@ import asyncio
 import os
 import re
 import shutil
+import signal
 import socket
 import subprocess
 import sys
@@ -18,7 +19,7 @@ from pathlib import Path
 import pytest
 
 from dsfd.daemon.notify import Notifier
-from tests.daemon.harness import ROOT, DaemonProcess, write_panel
+from tests.daemon.harness import ROOT, DaemonProcess, query, write_panel
 
 UNIT = ROOT / "systemd" / "dsfd@.service"
 MAX_EXPOSURE = 3.0
@@ -82,7 +83,12 @@ def _datagrams(sock: socket.socket) -> list[str]:
             return out
 
 
-def test_daemon_sends_ready_a_watchdog_per_cycle_and_stopping(tmp_path: Path) -> None:
+@pytest.mark.parametrize("stop", ["cycles", "sigterm"])
+def test_daemon_sends_ready_a_watchdog_per_cycle_and_stopping(tmp_path: Path,
+                                                              stop: str) -> None:
+    """Ended by ``--cycles`` or, as ``systemctl stop`` does, by SIGTERM mid-run: READY, one
+    WATCHDOG per cycle, STOPPING last; after SIGTERM the cycle in flight completes and the
+    run is marked ended by the signal."""
     address = str(tmp_path / "notify.sock")
     sock = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
     sock.bind(address)
@@ -96,10 +102,14 @@ def test_daemon_sends_ready_a_watchdog_per_cycle_and_stopping(tmp_path: Path) ->
         # Read as systemd does, while the daemon runs (a full queue would drop messages).
         asyncio.get_running_loop().add_reader(sock.fileno(),
                                               lambda: messages.extend(_datagrams(sock)))
+        limit = cycles if stop == "cycles" else 10_000
         daemon = DaemonProcess(["run", "--config", str(panel), "--dry-run", "--plant", "sim",
-                                "--cycles", str(cycles), "--state-dir", str(tmp_path / "s")],
+                                "--cycles", str(limit), "--state-dir", str(tmp_path / "s")],
                                env={"NOTIFY_SOCKET": address, "WATCHDOG_USEC": "180000000"})
         await daemon.start()
+        if stop == "sigterm":
+            await daemon.wait_cycle(cycles)
+            daemon.signal(signal.SIGTERM)
         rc = await daemon.wait_exit()
         messages.extend(_datagrams(sock))
         return rc
@@ -110,7 +120,11 @@ def test_daemon_sends_ready_a_watchdog_per_cycle_and_stopping(tmp_path: Path) ->
         sock.close()
     fields = [dict(line.split("=", 1) for line in m.splitlines()) for m in messages]
     assert fields[0].get("READY") == "1"
-    assert sum(f.get("WATCHDOG") == "1" for f in fields) == cycles
+    (reason, stored), = query(tmp_path / "s" / "timeseries.sqlite",
+                              "SELECT end_reason, cycles FROM runs")
+    assert reason == ("cycles done" if stop == "cycles" else "signal")
+    assert stored >= cycles if stop == "sigterm" else stored == cycles
+    assert sum(f.get("WATCHDOG") == "1" for f in fields) == stored
     assert fields[-1].get("STOPPING") == "1"
     # READY comes before the first ping, STOPPING after the last.
     first_ping = next(i for i, f in enumerate(fields) if "WATCHDOG" in f)

@@ -199,6 +199,14 @@ def test_a_person_moves_the_louver_and_the_daemon_holds_then_resumes(
     assert status["last_cycle"]["method"] == "manual"
     kinds = [k for (k,) in query(r.db, "SELECT kind FROM events ORDER BY event_id")]
     assert kinds.count("manual_override") == 1 and "hold_ended" in kinds
+    # While held, the daemon kept estimating and calibrating, with the position read back
+    # (the person's) as the applied control.
+    model = {c: (x1, phi) for c, x1, phi in query(
+        r.db, "SELECT cycle, est_x1_c, applied_phi_deg FROM model")}
+    assert all(model[c][0] is not None for c in held)
+    assert all(model[c][1] == target for c in quiet)
+    updates = [c for (c,) in query(r.db, "SELECT cycle FROM parameters WHERE source = 'online'")]
+    assert any(first <= c <= held[-1] for c in updates), (updates, first, held[-1])
 
 
 def test_wall_switch_and_operator_commands_take_effect_within_one_cycle(

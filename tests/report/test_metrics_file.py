@@ -116,3 +116,24 @@ def test_a_metrics_file_must_be_a_prom_file_in_a_directory_that_exists(tmp_path)
         (issue,) = exc.value.issues
         assert issue.path == "daemon.metrics_file" and why in issue.message
         assert not path.exists()
+
+
+def test_flagged_samples_are_counted_by_signal_and_quality_as_stored(tmp_path):
+    """A faulted dry run (tests/report/dryrun.py: x3 drops out, x1 spikes): the counters of
+    ``dsfd_flagged_samples_total`` carry the labels ``signal`` and ``quality`` and equal the
+    database's count of non-good samples per signal and quality."""
+    from tests.report.conftest import dry_run
+
+    prom = tmp_path / "dsfd-test.prom"
+    panel = write_panel(tmp_path / "panel.yaml", devices=False,
+                        extra={"daemon": {"metrics_file": str(prom)}})
+    state = tmp_path / "state"
+    dry_run(panel, state, 45, MORNING_ISO, faults=True)
+    flagged = {(s.labels["signal"], s.labels["quality"]): s.value
+               for s in parse(prom.read_text())["dsfd_flagged_samples"]
+               if s.name == "dsfd_flagged_samples_total"}
+    stored = {(sig, q): float(n) for sig, q, n in query(
+        state / "timeseries.sqlite",
+        "SELECT signal, quality, COUNT(*) FROM samples WHERE quality != 'good' GROUP BY 1, 2")}
+    assert ("x3_c", "not_finite") in stored and ("x1_c", "out_of_range") in stored
+    assert flagged == stored

@@ -15,13 +15,25 @@ CHROMIUM = next((p for p in map(shutil.which, ("chromium", "chromium-browser",
                                                "google-chrome")) if p), None)
 
 
-def screenshot(html_uri: str, out, profile, *, height: int) -> None:
-    subprocess.run(
+def chromium(profile, *args: str) -> str:
+    """Headless Chromium with the flags this machine's closed network needs; its stdout."""
+    return subprocess.run(
         [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
          "--no-first-run", "--disable-background-networking", "--disable-component-update",
-         "--disable-sync", f"--user-data-dir={profile}", f"--screenshot={out}",
-         f"--window-size=1400,{height}", html_uri],
-        check=True, capture_output=True, timeout=180)
+         "--disable-sync", f"--user-data-dir={profile}", *args],
+        check=True, capture_output=True, text=True, timeout=180).stdout
+
+
+def screenshot(html_uri: str, out, profile, *, height: int) -> None:
+    chromium(profile, f"--screenshot={out}", f"--window-size=1400,{height}", html_uri)
+
+
+#: Appended to a copy of the report (the report itself has no script): after the page's load
+#: event, the ids of the figures whose image the browser decoded, with its pixel width.
+DECODED_PROBE = ("<script>addEventListener('load', () => { document.body.dataset.decoded = "
+                 "[...document.images].filter(i => i.complete && i.naturalWidth > 0)"
+                 ".map(i => i.closest('figure').id + ':' + i.naturalWidth).join(' '); })"
+                 "</script>")
 
 
 def test_the_report_is_one_self_contained_file_with_every_figure(faulted_run):
@@ -59,3 +71,20 @@ def test_the_report_renders_in_headless_chromium(faulted_run, tmp_path):
     first = int(np.argmax(coloured_rows))
     bands = np.array_split(coloured_rows[first:], 5)
     assert all(b.any() for b in bands)
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="no Chromium installed (Debian package "
+                    "'chromium'; .ci/run installs it)")
+def test_chromium_decodes_every_figure_of_the_report(faulted_run, tmp_path):
+    """Every figure's embedded PNG is decoded by the browser (a broken image has no natural
+    width), read from the DOM Chromium serialises after the page's load event."""
+    html = faulted_run.html.read_text()
+    probed = tmp_path / "probed.html"
+    probed.write_text(html.replace("</body>", DECODED_PROBE + "</body>"))
+    profile = tmp_path / "profile"
+    profile.mkdir()
+    dom = chromium(profile, "--dump-dom", probed.as_uri())
+    (decoded,) = re.findall(r'<body[^>]*data-decoded="([^"]*)"', dom)
+    widths = dict(item.split(":") for item in decoded.split())
+    assert sorted(widths) == sorted(fig_id for fig_id, *_ in FIGURES)
+    assert all(int(w) >= 300 for w in widths.values()), widths
