@@ -139,7 +139,7 @@ def test_the_oracles_power_law_is_the_plants_diagonal_orifice(suwon, rmis_raw, r
     predicts the plant's regime-5 cavity speed within 25 %, where the config's default
     c, n (the plant's nominal lumped θ) predicted about half of it."""
     from dsfd.physics.model import LumpedModel
-    from dsfd.sim.closed_loop import oracle_theta
+    from dsfd.sim.oracle_controllers import oracle_theta
 
     plant = Plant(suwon, seed=1, weather_series=rmis_raw)
     plant.reset(day_start(rmis, 1) + 2.0 * HOUR, command=Command(0.0, 5, 100.0))
