@@ -243,6 +243,13 @@ def paper_tables_seeds(cfg: PanelConfig, seeds: int, *, weather: str = WEATHER,
         fig = paper_tables(cfg, seed=seed, weather=weather, validation_days=validation_days,
                            progress=progress).figures
         out.update({f"seed_{seed}.{k}": v for k, v in fig.items()})
+        if progress is not None:  # the seed's figures now: a run of many seeds takes hours
+            speeds = "/".join(f"{fig.get(f'online.velocity_true_mae_cms.regime_{r}', np.nan):.2f}"
+                              for r in PAPER_TABLE1)
+            progress(f"seed {seed} done: f_true {fig['truth.f']:.0f}, cavity speed vs the true "
+                     f"|v| in regimes {'/'.join(map(str, PAPER_TABLE1))}: {speeds} cm/s; "
+                     f"T h1 {fig['online.h1.mean_mae_c']:.4f}, "
+                     f"h15 {fig['online.h15.mean_mae_c']:.4f} degC")
         for r in PAPER_TABLE1:
             worst = max(worst, fig.get(f"online.velocity_true_mae_cms.regime_{r}", np.inf))
     out["online_velocity_true_mae_cms_max"] = worst
