@@ -19,14 +19,20 @@ Figures (flat, units in the names):
   interpreter and the libraries, shared by all daemons of a machine);
 * ``import_rss_mb.<group>`` — resident memory each group of modules adds when imported in a
   fresh interpreter in the order a daemon loads them (``python`` is the bare interpreter,
-  ``total`` all of them together), and ``import_rss_mb.plant`` what the simulated plant
-  (SciPy's integrator) would add on top — the daemon process does not load it;
+  ``total`` all of them together), and then what the daemon does not load, each on top:
+  ``import_rss_mb.scipy_optimize`` (SciPy's optimiser, with scipy.linalg: only the
+  ``paper-sqp`` optimiser option) and ``import_rss_mb.plant`` (the simulated plant);
 * ``cpu_s_per_cycle`` — the daemon process's CPU time (user + system) per cycle, and
   ``plant_cpu_s_per_cycle`` that of the plant process (a deployment does not pay it);
 * ``plant_rss_mb_max`` — resident memory of the plant process;
 * ``cycle_ms_median``, ``cycle_ms_p99`` — wall time of one cycle (all stages, including the
   wait for the plant's integration);
 * ``decide_ms_median``, ``calibrate_ms_p99``, ``read_ms_median`` — the main stages;
+* ``panels_per_4gb_2core`` — how many panel daemons a 2-core, 4 GB controller runs, the
+  smaller of the memory bound ⌊(4096 − 512) / rss_mb_max⌋ (512 MB left to the OS; every
+  daemon counted with all its resident pages, shared library pages too, so a lower bound)
+  and the CPU bound ⌊0.5 × 2 × 60 / cpu_s_per_cycle⌋ (half of two cores, one cycle a
+  minute); ``panels_per_4gb_memory`` and ``panels_per_2core_cpu`` are the two bounds;
 * ``cycles``, ``calibration_updates``, ``fallback_cycles``, ``wall_s``.
 """
 
@@ -48,10 +54,13 @@ from dsfd.daemon.logging_setup import configure_logging
 from dsfd.daemon.loop import CycleOutcome
 from dsfd.daemon.runner import RunOptions, load_for_run, serve
 
-__all__ = ["DEFAULT_CYCLES", "IMPORT_GROUPS", "bench_daemon", "import_rss_mb", "resident_split_mb",
-           "rss_mb"]
+__all__ = ["DEFAULT_CYCLES", "IMPORT_GROUPS", "NOT_LOADED_GROUPS", "bench_daemon",
+           "import_rss_mb", "resident_split_mb", "rss_mb"]
 
 DEFAULT_CYCLES = 10_000
+#: The controller of ``panels_per_4gb_2core``: memory left to the daemons [MB] and the share
+#: of its two cores they may use.
+CONTROLLER_MB, OS_RESERVE_MB, CONTROLLER_CORES, CPU_SHARE = 4096.0, 512.0, 2, 0.5
 #: RSS is sampled every this many cycles.
 RSS_EVERY = 50
 _PAGE_MB = os.sysconf("SC_PAGE_SIZE") / 2**20
@@ -61,11 +70,17 @@ IMPORT_GROUPS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("asyncio", ("asyncio",)),
     ("stdlib_and_small", ("sqlite3", "yaml", "structlog", "logging.handlers")),
     ("pymodbus", ("pymodbus", "pymodbus.client", "serial")),
-    ("scipy_linalg", ("scipy.linalg",)),
-    ("scipy_optimize", ("scipy.optimize",)),
     ("dsfd_core", ("dsfd.physics.model", "dsfd.control.optimiser", "dsfd.estimation")),
     ("dsfd_daemon", ("dsfd.daemon.runner", "dsfd.drivers.factory", "dsfd.drivers.modbus")),
     ("dsfd_cli", ("dsfd.cli",)),
+)
+
+#: What a daemon does NOT load, measured on top of the daemon's modules: SciPy's optimiser
+#: (only with ``control.optimiser: paper-sqp``; it brings scipy.linalg and SciPy's own
+#: OpenBLAS) and the simulated plant (SciPy's integrator; dry runs only).
+NOT_LOADED_GROUPS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    ("scipy_optimize", ("scipy.optimize",)),
+    ("plant", ("dsfd.sim.plant.plant",)),
 )
 
 
@@ -97,7 +112,7 @@ import importlib, json, os, sys
 def rss():
     with open('/proc/self/statm') as fh:
         return int(fh.read().split()[1]) * os.sysconf('SC_PAGE_SIZE') / 2**20
-groups = json.loads(sys.argv[1])
+groups, extras = json.loads(sys.argv[1]), json.loads(sys.argv[2])
 out = {'python': rss()}
 last = out['python']
 for name, mods in groups:
@@ -109,8 +124,11 @@ for name, mods in groups:
     now = rss()
     out[name], last = now - last, now
 out['total'] = last
-importlib.import_module('dsfd.sim.plant.plant')
-out['plant'] = rss() - last
+for name, mods in extras:
+    for m in mods:
+        importlib.import_module(m)
+    now = rss()
+    out[name], last = now - last, now
 print(json.dumps(out))
 """
 
@@ -118,7 +136,8 @@ print(json.dumps(out))
 def import_rss_mb() -> dict[str, float]:
     """What each module group of :data:`IMPORT_GROUPS` adds to a fresh interpreter [MB]."""
     proc = subprocess.run([sys.executable, "-c", _IMPORT_SCRIPT,
-                           json.dumps([[n, list(m)] for n, m in IMPORT_GROUPS])],
+                           json.dumps([[n, list(m)] for n, m in IMPORT_GROUPS]),
+                           json.dumps([[n, list(m)] for n, m in NOT_LOADED_GROUPS])],
                           capture_output=True, text=True, timeout=120, check=True)
     return {k: float(v) for k, v in json.loads(proc.stdout).items()}
 
@@ -172,23 +191,15 @@ def bench_daemon(config: Path, *, cycles: int = DEFAULT_CYCLES, seed: int = 0,
     anon_mb, file_mb = resident_split_mb()
     wall = time.perf_counter() - start
     n = summary.cycles
-    at = np.array([c for c, _ in rss], float)
-    mb = np.array([m for _, m in rss], float)
-    tenth = max(n // 10, RSS_EVERY)
-    before = mb[(at > n // 2 - tenth) & (at <= n // 2)]
-    late = mb[at > n - tenth]
     cpu_s = (cpu1.user - cpu0.user) + (cpu1.system - cpu0.system)
     return {
         "cycles": float(n),
-        "rss_mb_start": float(mb[0]) if mb.size else float("nan"),
-        "rss_mb_end": float(mb[-1]) if mb.size else float("nan"),
-        "rss_mb_max": float(mb.max()) if mb.size else rss_mb(),
-        "rss_growth_mb": float(late.mean() - before.mean()) if before.size and late.size
-        else float("nan"),
+        **_memory_figures(rss, n),
         "anon_mb_end": anon_mb,
         "file_mb_end": file_mb,
         **{f"import_rss_mb.{k}": v for k, v in imports.items()},
         "cpu_s_per_cycle": cpu_s / n if n else float("nan"),
+        **_panels_per_controller(rss, n, cpu_s),
         "plant_cpu_s_per_cycle": plant.cpu_s / n if n else float("nan"),
         "plant_rss_mb_max": plant.rss_mb_max,
         "cycle_ms_median": float(np.nanmedian(cycle_ms[:n])),
@@ -201,3 +212,31 @@ def bench_daemon(config: Path, *, cycles: int = DEFAULT_CYCLES, seed: int = 0,
         "fallback_cycles": float(counts["fallback_cycles"]),
         "wall_s": wall,
     }
+
+
+def _memory_figures(rss: list[tuple[int, float]], n: int) -> dict[str, float]:
+    """``rss_mb_start/end/max`` and ``rss_growth_mb`` from the (cycle, RSS) samples."""
+    at = np.array([c for c, _ in rss], float)
+    mb = np.array([m for _, m in rss], float)
+    if not mb.size:
+        now = rss_mb()
+        return {"rss_mb_start": now, "rss_mb_end": now, "rss_mb_max": now,
+                "rss_growth_mb": float("nan")}
+    tenth = max(n // 10, RSS_EVERY)
+    before = mb[(at > n // 2 - tenth) & (at <= n // 2)]
+    late = mb[at > n - tenth]
+    return {"rss_mb_start": float(mb[0]), "rss_mb_end": float(mb[-1]),
+            "rss_mb_max": float(mb.max()),
+            "rss_growth_mb": float(late.mean() - before.mean()) if before.size and late.size
+            else float("nan")}
+
+
+def _panels_per_controller(rss: list[tuple[int, float]], n: int,
+                           cpu_s: float) -> dict[str, float]:
+    """The ``panels_per_*`` figures (module docstring)."""
+    rss_max = _memory_figures(rss, n)["rss_mb_max"]
+    by_memory = float(np.floor((CONTROLLER_MB - OS_RESERVE_MB) / rss_max))
+    by_cpu = (float(np.floor(CPU_SHARE * CONTROLLER_CORES * 60.0 / (cpu_s / n)))
+              if n and cpu_s > 0 else float("nan"))
+    return {"panels_per_4gb_memory": by_memory, "panels_per_2core_cpu": by_cpu,
+            "panels_per_4gb_2core": float(np.nanmin([by_memory, by_cpu]))}

@@ -22,10 +22,11 @@ Notes
   residual scale) and m_r the mean number of lead times per rollout — the residuals of one
   rollout share its start-state and model-form error, so a rollout is counted as about one
   independent observation (a conservative effective-sample-size correction).
-* ``least_squares`` (trust-region reflective, bounds, LSMR sub-problem) with ``max_nfev``
-  residual evaluations; each accepted step costs one more batched rollout for the
-  Jacobian, or, with ``broyden`` > 0, a Broyden rank-one update of the previous one
-  (Broyden 1965; Dennis & Schnabel 1996, §8.1) between finite-difference refreshes.
+* :func:`dsfd.estimation.lsq.bounded_least_squares` (bounded, scaled Levenberg–Marquardt;
+  SciPy's ``least_squares`` until its import cost was measured) with ``max_nfev`` residual
+  evaluations; each accepted step costs one more batched rollout for the Jacobian, or,
+  with ``broyden`` > 0, a Broyden rank-one update of the previous one (Broyden 1965;
+  Dennis & Schnabel 1996, §8.1) between finite-difference refreshes.
 """
 
 from __future__ import annotations
@@ -34,9 +35,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import solve_triangular
-from scipy.optimize import least_squares
 
+from dsfd.estimation.lsq import bounded_least_squares
 from dsfd.estimation.objective import OUTPUTS, WindowProblem
 from dsfd.estimation.params import N_PARAMS, Param, ParameterSpace
 
@@ -115,7 +115,7 @@ def _prior_rows(cov_free: np.ndarray, weight: float) -> np.ndarray:
     if weight <= 0.0 or p == 0:
         return np.zeros((0, p))
     chol = np.linalg.cholesky(cov_free + 1e-12 * np.eye(p))
-    return np.sqrt(weight) * solve_triangular(chol, np.eye(p), lower=True)
+    return np.sqrt(weight) * np.linalg.solve(chol, np.eye(p))
 
 
 def fit_window(problem: WindowProblem, space: ParameterSpace, *, prior_z: np.ndarray,
@@ -170,13 +170,9 @@ def fit_window(problem: WindowProblem, space: ParameterSpace, *, prior_z: np.nda
                          message="nothing to fit")
     r0 = objective.residuals(x0)
     cost0 = 0.5 * float(r0 @ r0)
-    # The subspace solver ("lsmr") needs two free variables: with one, SciPy's 2-D trust
-    # region indexes past a 1×1 matrix (IndexError); the dense SVD of an m×1 Jacobian is
-    # trivial anyway.
-    res = least_squares(objective.residuals, x0, jac=objective.jacobian,
-                        bounds=(objective.lo, objective.hi), method="trf", loss="linear",
-                        x_scale=space.prior_sd[idx], max_nfev=max_nfev, ftol=1e-5,
-                        xtol=1e-5, gtol=1e-8, tr_solver="lsmr" if idx.size > 1 else "exact")
+    res = bounded_least_squares(objective.residuals, objective.jacobian, x0, objective.lo,
+                                objective.hi, x_scale=space.prior_sd[idx], max_nfev=max_nfev,
+                                ftol=1e-5, xtol=1e-5, gtol=1e-8)
     x = res.x if res.cost <= cost0 else x0
     cov = np.array(prior_cov, float)
     cov[idx, :] = 0.0

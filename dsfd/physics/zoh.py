@@ -24,7 +24,6 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from scipy.linalg import expm
 
 
 class ZohStep(NamedTuple):
@@ -124,6 +123,8 @@ def zoh_vanloan(a: np.ndarray, b: np.ndarray, x0: np.ndarray, dt: float) -> ZohS
     M = [[A, b], [0, 0]], E = expm(M T): G = E[:n, :n], H = E[:n, n]; the step average is
     A⁻¹((x_{k+1} − x_k)/T − b) (docs/model.md#zoh). Batched over leading dimensions.
     """
+    from scipy.linalg import expm  # a reference path only: the daemon never loads scipy.linalg
+
     n = a.shape[-1]
     batch = np.broadcast_shapes(a.shape[:-2], b.shape[:-1], x0.shape[:-1])
     m = np.zeros((*batch, n + 1, n + 1))
@@ -142,6 +143,8 @@ def step_integral_vanloan(a: np.ndarray, b: np.ndarray, x0: np.ndarray, dt: floa
     N = [[M, I], [0, 0]] with M = [[A, b], [0, 0]]; F = expm(N T); ∫ z dt = F[:7, 7:] z_k with
     z = [x; 1] (docs/model.md#zoh; the block is the integral, divide by T for the average).
     """
+    from scipy.linalg import expm  # a reference path only (see zoh_vanloan)
+
     n = a.shape[-1]
     k = n + 1
     big = np.zeros((2 * k, 2 * k))

@@ -48,18 +48,26 @@ def test_the_daemon_bench_measures_a_process_without_the_plant():
         "from dsfd.bench.daemon import bench_daemon\n"
         f"fig = bench_daemon(Path({str(PANEL)!r}), cycles=70, fidelity='lumped')\n"
         "fig['plant_in_daemon'] = float('dsfd.sim.plant.plant' in sys.modules)\n"
+        "fig['scipy_in_daemon'] = float(any(m.split('.')[0] == 'scipy' for m in sys.modules))\n"
         "print(json.dumps(fig))\n")
     proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
                           timeout=600)
     assert proc.returncode == 0, proc.stderr
     fig = json.loads(proc.stdout.strip().splitlines()[-1])
     assert fig["plant_in_daemon"] == 0.0
+    # calibrated (below) without SciPy: its optimiser is measured, not loaded
+    assert fig["scipy_in_daemon"] == 0.0 and fig["import_rss_mb.scipy_optimize"] > 0
     assert fig["cycles"] == 70 and fig["calibration_updates"] >= 1
     groups = [k for k in fig if k.startswith("import_rss_mb.")]
     assert {"import_rss_mb.numpy", "import_rss_mb.scipy_optimize",
             "import_rss_mb.total"} <= set(groups)
-    parts = sum(fig[k] for k in groups if k not in ("import_rss_mb.total",
-                                                    "import_rss_mb.plant"))
+    parts = sum(fig[k] for k in groups if k not in (
+        "import_rss_mb.total", "import_rss_mb.plant", "import_rss_mb.scipy_optimize"))
     assert parts == pytest.approx(fig["import_rss_mb.total"], rel=1e-9)
     assert 0 < fig["cpu_s_per_cycle"] < 60 and fig["plant_cpu_s_per_cycle"] > 0
     assert fig["rss_mb_max"] >= fig["rss_mb_start"] > fig["import_rss_mb.python"]
+    # 4 GB less the OS's 512 MB holds the panels counted, at each one's largest RSS
+    panels = fig["panels_per_4gb_2core"]
+    assert 1 <= panels <= min(fig["panels_per_4gb_memory"], fig["panels_per_2core_cpu"])
+    assert fig["panels_per_4gb_memory"] * fig["rss_mb_max"] <= 4096 - 512
+    assert (fig["panels_per_4gb_memory"] + 1) * fig["rss_mb_max"] > 4096 - 512
