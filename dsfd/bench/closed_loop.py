@@ -140,11 +140,15 @@ def _share(j: dict[str, float], name: str, ref: str = "plant-oracle") -> float:
 def bench_closed_loop(cfg: PanelConfig, series: WeatherSeries, *, days: float = 1.0,
                       seed: int = 1, cases: Sequence[str] = CASES,
                       controllers: Sequence[str] = CONTROLLERS, warmup_h: float = WARMUP_H,
-                      progress: Callable[[str], None] | None = None) -> dict[str, float]:
+                      progress: Callable[[str], None] | None = None,
+                      on_figures: Callable[[dict[str, float]], None] | None = None,
+                      ) -> dict[str, float]:
     """Run every controller on every case; flat figures ``<case>.<controller>.<figure>``
     and ``<case>.mpc_share_of_plant_oracle_saving`` (and the other shares) when ``rule`` and
     ``plant-oracle`` are among ``controllers`` (a run of some controllers alone, e.g. to add
-    the split to an earlier run on the same seed, has no shares)."""
+    the split to an earlier run on the same seed, has no shares). ``on_figures`` receives a
+    copy of the figures so far after every controller's run (a plant-oracle day takes about
+    an hour: the CLI saves them, so a stopped bench keeps what it finished)."""
     unknown = sorted(set(cases) - set(CASES))
     if unknown:
         raise ValueError(f"unknown case(s) {unknown}; choose from {', '.join(CASES)}")
@@ -176,6 +180,8 @@ def bench_closed_loop(cfg: PanelConfig, series: WeatherSeries, *, days: float = 
             if progress is not None:
                 progress(f"{case}: {name} J {scored['J_kwh']:+.3f} kWh "
                          f"({time.perf_counter() - wall:.0f} s)")
+            if on_figures is not None:
+                on_figures(dict(fig))
         if not {"rule", "plant-oracle"} <= j.keys():
             continue  # a partial run (e.g. only the split controllers): no shares
         for name in controllers:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from collections.abc import Callable
 from pathlib import Path
@@ -108,7 +109,9 @@ def _bench_closed_loop(args: argparse.Namespace) -> dict[str, float]:
         load_panel(args.config), load_weather(args.weather or "rmis-golden-2022-01"),
         days=1.0 if args.days is None else args.days, seed=args.seed,
         cases=tuple(args.case) if args.case else CASES, controllers=controllers,
-        progress=lambda msg: print(msg, file=sys.stderr, flush=True))
+        progress=lambda msg: print(msg, file=sys.stderr, flush=True),
+        on_figures=None if args.json is None else lambda fig: _write_json(
+            args.json, args.target, {**fig, "partial": 1.0}))
     print(report(figures))
     print()
     return figures
@@ -167,6 +170,15 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=run)
 
 
+def _write_json(path: Path, target: str, figures: dict[str, float]) -> None:
+    """``{"target": …, **figures}`` to ``path``, replaced atomically (a long bench rewrites
+    it as it goes: a reader never sees half a file)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(json.dumps({"target": target, **figures}, indent=1))
+    os.replace(tmp, path)
+
+
 def run(args: argparse.Namespace) -> int:
     for name in ("days", "cycles", "backlog"):
         value = getattr(args, name)
@@ -189,7 +201,6 @@ def run(args: argparse.Namespace) -> int:
     for key, value in figures.items():
         print(f"  {key:<{width}}  {value:14.4g}")
     if args.json:
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps({"target": args.target, **figures}, indent=1))
+        _write_json(args.json, args.target, figures)
         print(f"wrote {args.json}")
     return 0

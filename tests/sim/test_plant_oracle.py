@@ -132,6 +132,25 @@ def test_bench_closed_loop_reports_the_share_per_case(tmp_path):
     share = fig["clear-heating.mpc_share_of_plant_oracle_saving"]
     assert share == pytest.approx((j["rule"] - j["mpc"]) / (j["rule"] - j["plant-oracle"]))
     assert "plant-oracle" in proc.stdout
+    assert "partial" not in fig  # the complete run replaced the figures saved on the way
+
+
+@pytest.mark.slow
+def test_bench_closed_loop_hands_over_the_figures_after_every_controller(suwon, rmis_raw):
+    """A plant-oracle day takes about an hour: the figures so far go out after every
+    controller (the CLI saves them), and a run without rule and plant-oracle (e.g. the
+    split controllers added to an earlier run) has no shares instead of failing."""
+    from dsfd.bench.closed_loop import bench_closed_loop
+
+    snapshots = []
+    fig = bench_closed_loop(suwon, rmis_raw, days=0.003, cases=("clear-heating",),
+                            controllers=("mpc", "mpc-true-weather"), warmup_h=0.0,
+                            on_figures=snapshots.append)
+    assert len(snapshots) == 2
+    assert "clear-heating.mpc.J_kwh" in snapshots[0]
+    assert "clear-heating.mpc-true-weather.J_kwh" not in snapshots[0]
+    assert snapshots[1] == fig
+    assert not [k for k in fig if "share" in k]
 
 
 def test_the_oracles_power_law_is_the_plants_diagonal_orifice(suwon, rmis_raw, rmis):
