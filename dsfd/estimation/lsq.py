@@ -87,11 +87,19 @@ def bounded_least_squares(fun: Callable[[np.ndarray], np.ndarray],
     max_nfev : int
         Residual evaluations allowed (at least 1).
     ftol, xtol, gtol : float
+
+    Raises
+    ------
+    ValueError
+        The residuals at the start are not finite (as ``least_squares``); a trial point
+        with non-finite residuals is rejected like one that raises the cost.
     """
     lo, hi = np.asarray(lo, float), np.asarray(hi, float)
     scale = np.asarray(x_scale, float)
     x = np.clip(np.asarray(x0, float), lo, hi)
     r = np.asarray(fun(x), float)
+    if not np.all(np.isfinite(r)):
+        raise ValueError("residuals are not finite at the start point")
     cost = 0.5 * float(r @ r)
     j = np.asarray(jac(x), float)
     nfev, njev, nu = 1, 1, 2.0

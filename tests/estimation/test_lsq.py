@@ -86,6 +86,22 @@ def test_cost_never_rises_and_the_evaluation_budget_holds():
     assert res.fun == pytest.approx(p.fun(res.x)) and res.jac == pytest.approx(p.jac(res.x))
 
 
+def test_non_finite_residuals_raise_at_the_start_and_are_rejected_later():
+    with pytest.raises(ValueError, match="not finite"):
+        bounded_least_squares(lambda x: np.array([np.nan]), lambda x: np.ones((1, 1)),
+                              np.zeros(1), -np.ones(1), np.ones(1), x_scale=np.ones(1),
+                              max_nfev=5)
+    # r = x − 2, but NaN beyond x = 1 (a model that fails there): the first step lands
+    # in the NaN region, is rejected, and the shorter steps approach 1 from below
+    p = Counted(lambda x: np.array([x[0] - 2.0 if x[0] <= 1.0 else np.nan]),
+                lambda x: np.ones((1, 1)))
+    res = bounded_least_squares(p, p.jac, np.array([-3.0]), np.array([-5.0]),
+                                np.array([5.0]), x_scale=np.array([1.0]), max_nfev=40)
+    assert np.isnan(p.costs).any()  # the rejection was exercised
+    assert np.isfinite(res.cost) and res.x[0] <= 1.0
+    assert res.cost < p.costs[0] and res.x[0] > 0.0
+
+
 def test_scaling_makes_badly_scaled_variables_converge_alike():
     """x₂ lives at 1e4 times x₁'s scale: with x_scale the solver still finds (1, 1e4)."""
     p = Counted(lambda x: np.array([x[0] - 1.0, (x[1] - 1e4) / 1e4, x[0] * x[1] / 1e4 - 1.0]),
