@@ -12,7 +12,7 @@ YAML shape (every key optional; the defaults suit a 1-minute controller cycle)::
       max_nfev: 8                 # model evaluations per on-line update
       offline_max_nfev: 40        # ... for the off-line batch fit
       flow_from_velocity: true    # f, c, n from the cavity speed, the rest from x1..x5
-      loss: soft_l1               # robust loss of scipy.optimize.least_squares
+      loss: soft_l1               # robust loss (as scipy.optimize.least_squares names them)
       f_scale: 1.0                # soft threshold of the loss, in residual scales
       temperature_scale_k: 0.3    # residual scale of x1..x5
       velocity_scale_ms: 0.01     # residual scale of the cavity speed |v|
@@ -84,7 +84,7 @@ class Calibration:
         "heat-transfer coefficients and offsets to the temperatures alone (false: one joint "
         "fit, in which f, c, n also absorb the temperatures' model-form error)")
     loss: Literal["linear", "soft_l1", "huber", "cauchy", "arctan"] = setting(
-        "soft_l1", doc="Robust loss ρ of scipy.optimize.least_squares")
+        "soft_l1", doc="Robust loss ρ (the losses of scipy.optimize.least_squares)")
     f_scale: float = setting(
         1.0, doc="Soft threshold of the loss, in units of the residual scales", gt=0, le=100)
     temperature_scale_k: float = setting(

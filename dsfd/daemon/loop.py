@@ -326,7 +326,7 @@ class Controller:
 
     def _optimiser(self, problem: ControlProblem) -> Callable[[], Decision]:
         if self.cfg.control.optimiser == "paper-sqp":
-            # imported here: SciPy's optimiser costs every other daemon ~48 MB resident
+            # imported here: SciPy's optimiser costs every other daemon ~38 MB resident
             from dsfd.control.paper_sqp import optimise_paper_sqp
 
             mpc = self.mpc

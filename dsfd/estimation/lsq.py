@@ -1,11 +1,11 @@
 """A bounded, scaled Levenberg–Marquardt solver for the small dense fits of calibration.
 
 Why not ``scipy.optimize.least_squares``: importing ``scipy.optimize`` (which loads
-``scipy.linalg``, ``scipy.sparse`` and SciPy's own OpenBLAS) adds ~48 MB of resident memory
-to every daemon — half of a panel's budget (``dsfd bench daemon``: ``import_rss_mb``) —
-for a problem of at most 14 unknowns with a dense Jacobian, where the whole method is a few
-lines of numpy. The result is checked against SciPy's trust-region-reflective solver in
-``tests/estimation/test_lsq.py``.
+``scipy.linalg``, ``scipy.sparse`` and SciPy's own OpenBLAS) adds ~38 MB of resident memory
+to every daemon, which peaks at ~60 MB without it (``dsfd bench daemon``: ``import_rss_mb``,
+``rss_mb_max``) — for a problem of at most 14 unknowns with a dense Jacobian, where the
+whole method is a few lines of numpy. The result is checked against SciPy's
+trust-region-reflective solver in ``tests/estimation/test_lsq.py``.
 
 Notes
 -----

@@ -113,7 +113,7 @@ def test_scaling_makes_badly_scaled_variables_converge_alike():
 
 
 def test_an_online_calibration_update_loads_no_scipy():
-    """The daemon's calibration runs without importing SciPy (its ~48 MB resident cost
+    """The daemon's calibration runs without importing SciPy (its ~38 MB resident cost
     measured by ``dsfd bench daemon``'s ``import_rss_mb``): a real update on a synthetic
     lumped record in a fresh interpreter."""
     code = textwrap.dedent("""
