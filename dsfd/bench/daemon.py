@@ -192,14 +192,15 @@ def bench_daemon(config: Path, *, cycles: int = DEFAULT_CYCLES, seed: int = 0,
     wall = time.perf_counter() - start
     n = summary.cycles
     cpu_s = (cpu1.user - cpu0.user) + (cpu1.system - cpu0.system)
+    memory = _memory_figures(rss, n)
     return {
         "cycles": float(n),
-        **_memory_figures(rss, n),
+        **memory,
         "anon_mb_end": anon_mb,
         "file_mb_end": file_mb,
         **{f"import_rss_mb.{k}": v for k, v in imports.items()},
         "cpu_s_per_cycle": cpu_s / n if n else float("nan"),
-        **_panels_per_controller(rss, n, cpu_s),
+        **_panels_per_controller(memory["rss_mb_max"], n, cpu_s),
         "plant_cpu_s_per_cycle": plant.cpu_s / n if n else float("nan"),
         "plant_rss_mb_max": plant.rss_mb_max,
         "cycle_ms_median": float(np.nanmedian(cycle_ms[:n])),
@@ -231,10 +232,9 @@ def _memory_figures(rss: list[tuple[int, float]], n: int) -> dict[str, float]:
             else float("nan")}
 
 
-def _panels_per_controller(rss: list[tuple[int, float]], n: int,
-                           cpu_s: float) -> dict[str, float]:
-    """The ``panels_per_*`` figures (module docstring)."""
-    rss_max = _memory_figures(rss, n)["rss_mb_max"]
+def _panels_per_controller(rss_max: float, n: int, cpu_s: float) -> dict[str, float]:
+    """The ``panels_per_*`` figures (module docstring) from the largest RSS [MB] and the
+    CPU seconds of ``n`` cycles."""
     by_memory = float(np.floor((CONTROLLER_MB - OS_RESERVE_MB) / rss_max))
     by_cpu = (float(np.floor(CPU_SHARE * CONTROLLER_CORES * 60.0 / (cpu_s / n)))
               if n and cpu_s > 0 else float("nan"))

@@ -123,7 +123,8 @@ def zoh_vanloan(a: np.ndarray, b: np.ndarray, x0: np.ndarray, dt: float) -> ZohS
     M = [[A, b], [0, 0]], E = expm(M T): G = E[:n, :n], H = E[:n, n]; the step average is
     A⁻¹((x_{k+1} − x_k)/T − b) (docs/model.md#zoh). Batched over leading dimensions.
     """
-    from scipy.linalg import expm  # a reference path only: the daemon never loads scipy.linalg
+    # imported here: only model.zoh = 'expm' (the reference) needs scipy.linalg, ~20 MB a daemon
+    from scipy.linalg import expm
 
     n = a.shape[-1]
     batch = np.broadcast_shapes(a.shape[:-2], b.shape[:-1], x0.shape[:-1])
