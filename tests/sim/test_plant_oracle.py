@@ -181,3 +181,14 @@ def test_the_oracles_power_law_is_the_plants_diagonal_orifice(suwon, rmis_raw, r
     nominal = v_model(plant.params.lumped_theta(suwon))
     assert 0.8 < mapped / v_plant < 1.25
     assert nominal / v_plant < 0.6
+
+
+def test_bench_closed_loop_names_an_unknown_controller_and_runs_nothing(tmp_path):
+    out = tmp_path / "cl.json"
+    proc = subprocess.run(
+        [sys.executable, "-m", "dsfd", "bench", "closed-loop", "--config", str(PANEL),
+         "--case", "clear-heating", "--controllers", "rule,mcp", "--json", str(out)],
+        capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2
+    assert "unknown controller(s) ['mcp']" in proc.stderr and "plant-oracle" in proc.stderr
+    assert not out.exists()
