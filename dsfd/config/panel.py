@@ -294,9 +294,9 @@ class ModelOptions:
     )
     louver_flow_loss: bool = setting(
         True, doc="The slats' flow loss K_L(φ) (Borda–Carnot per slat row, "
-        "docs/model.md#louver-flow-loss) adds to the form loss f of the orifice regimes, so the "
-        "louver angle also changes the airflow; false: the paper's model, where f alone stands for "
-        "the cavity's losses")
+        "docs/model.md#louver-flow-loss) adds to the form loss f of the orifice regimes and is in "
+        "series with the power law of regimes 5-8, so the louver angle also changes the airflow; "
+        "false: the paper's model, where f, c and n alone stand for the cavity's losses")
     cavity_air_profile: Literal["well_mixed", "exponential"] = setting(
         "exponential", doc="What the cavity-air state x5 stands for: 'exponential' (ISO 15099 "
         "ventilated gap: the mean of an air column warming exponentially from its inlet, "

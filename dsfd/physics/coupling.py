@@ -58,7 +58,8 @@ class StepInputs(NamedTuple):
         Daylighting benefit Q_DA of the step.
     cavity_loss : [-]
         Flow loss of the louver slats K_L(φ), added to the form loss f of the orifice
-        regimes (:func:`dsfd.physics.airflow.louver_flow_loss`).
+        regimes and in series with the power law of regimes 5–8
+        (:func:`dsfd.physics.airflow.louver_flow_loss`).
     """
 
     t_out_k: np.ndarray

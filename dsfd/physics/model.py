@@ -154,7 +154,8 @@ class LumpedModel:
         setup = flow_setup(regime.ravel(), or_.ravel(),
                            AirflowBoundary(*(np.ravel(v) for v in air)), self.geom,
                            f=(theta[..., Param.F] + inp.cavity_loss).ravel(),
-                           c=theta[..., Param.C].ravel(), n=theta[..., Param.N].ravel())
+                           c=theta[..., Param.C].ravel(), n=theta[..., Param.N].ravel(),
+                           k_louver=np.broadcast_to(inp.cavity_loss, shape).ravel())
         return setup.reshape(shape)
 
     def _batch(self, shape: tuple[int, ...], regime, or_, inputs: StepInputs, theta):

@@ -24,6 +24,7 @@ from dsfd.physics.airflow import (
     AirflowGeometry,
     FlowState,
     boundary_state,
+    louver_series_factor,
     opening_resistance,
     orifice_path_mass_flow,
     regularised_power,
@@ -86,6 +87,8 @@ class FlowSetup(NamedTuple):
     k_out: np.ndarray
     power_coef: np.ndarray  # c·OR [m3/(s Pa^n)]
     n: np.ndarray
+    louver_beta: np.ndarray  # K_L/(2 A_c²) in series with the power law [1/m4]
+    any_louver: bool
     p_atm: np.ndarray
     t_out: np.ndarray  # [K]
     t_in: np.ndarray  # [K]
@@ -124,7 +127,7 @@ class FlowSetup(NamedTuple):
 
 #: Which FlowSetup fields are indexed per batch row (arrays, except the all-open row index).
 _PER_ROW = tuple(
-    name not in ("any_orifice", "any_power", "any_all_open", "rows_all_open")
+    name not in ("any_orifice", "any_power", "any_all_open", "any_louver", "rows_all_open")
     for name in FlowSetup._fields
 )
 
@@ -138,15 +141,21 @@ def flow_setup(
     f: np.ndarray,
     c: np.ndarray,
     n: np.ndarray,
+    k_louver: np.ndarray | float = 0.0,
 ) -> FlowSetup:
-    """Precompute the cavity-temperature-independent flow data of a batch (see flows_at)."""
+    """Precompute the cavity-temperature-independent flow data of a batch (see flows_at).
+
+    ``f`` is the whole form loss of the orifice regimes (the louver's K_L included);
+    ``k_louver`` [-] is K_L(φ) alone, put in series with the power law of regimes 5–8
+    (docs/model.md#louver-flow-loss).
+    """
     regime = np.asarray(regime, dtype=int).ravel()
     nb = regime.size
 
     def flat(v: np.ndarray | float) -> np.ndarray:
         return np.broadcast_to(np.asarray(v, float), (nb,))
 
-    or_b, f_b, c_b, n_b = (flat(v) for v in (or_, f, c, n))
+    or_b, f_b, c_b, n_b, kl_b = (flat(v) for v in (or_, f, c, n, k_louver))
     bnd_b = AirflowBoundary(*(flat(v) for v in bnd))
     p_b, rho_b, t_b = boundary_state(bnd_b, geom)
     k_all = opening_resistance(or_b, f_b, geom)
@@ -181,6 +190,8 @@ def flow_setup(
         k_out=k_all[rows, outlet],
         power_coef=c_b * or_eff,
         n=n_b,
+        louver_beta=kl_b / (2.0 * geom.cavity_area_m2**2),
+        any_louver=bool(np.any((kl_b > 0) & (law == _LAW_POWER))),
         p_atm=bnd_b.p_atm_pa,
         t_out=bnd_b.t_out_k,
         t_in=bnd_b.t_in_k,
@@ -225,7 +236,8 @@ def path_flows(setup: FlowSetup, t5_k: np.ndarray, geom: AirflowGeometry, *,
     Two-opening paths: ΔP = p_B,in − p_B,out + ρ_c g (z_in − z_out) (docs/model.md#regimes,
     docs/model.md#plant-airflow); regimes 1–4 use the orifice closed form ṁ = sgn(ΔP)
     sqrt(2|ΔP|/(K_in/ρ_in + K_out/ρ_c)) (docs/model.md#path-flows), regimes 5–8 the power law
-    Q = c·OR·sgn(ΔP)|ΔP|^n with ṁ = ρ_up Q [PARK], both regularised below Δp_t
+    Q = c·OR·sgn(ΔP)|ΔP|^n with ṁ = ρ_up Q [PARK] (the louver's loss in series,
+    docs/model.md#louver-flow-loss), both regularised below Δp_t
     (docs/model.md#regularisation). Regime 9: the one-node solver with four orifices
     (docs/model.md#one-node [ENG]); regime 10: no flow.
     """
@@ -240,10 +252,10 @@ def path_flows(setup: FlowSetup, t5_k: np.ndarray, geom: AirflowGeometry, *,
         k_dn = np.where(fwd, s.k_out, s.k_in)
         flow = orifice_path_mass_flow(dp, k_up, k_dn, rho_up, rho_c, dp_t)
         if s.any_power:
-            power = rho_up * regularised_power(dp, s.power_coef, s.n, dp_t)
-            flow = np.where(s.law == _LAW_ORIFICE, flow, power)
+            flow = np.where(s.law == _LAW_ORIFICE, flow, _power_mass_flow(s, dp, rho_up, rho_c,
+                                                                          dp_t))
     else:
-        flow = rho_up * regularised_power(dp, s.power_coef, s.n, dp_t)
+        flow = _power_mass_flow(s, dp, rho_up, rho_c, dp_t)
     flow *= s.path_gain
     if s.any_all_open:
         r9 = s.rows_all_open
@@ -275,6 +287,15 @@ def path_flows(setup: FlowSetup, t5_k: np.ndarray, geom: AirflowGeometry, *,
     else:
         m9 = _EMPTY4
     return PathFlow(flow, rho_c, m9)
+
+
+def _power_mass_flow(s: FlowSetup, dp: np.ndarray, rho_up: np.ndarray, rho_c: np.ndarray,
+                     dp_t: float) -> np.ndarray:
+    """ṁ = ρ_up Q of the power law, with the louver's loss in series where it has one."""
+    q = regularised_power(dp, s.power_coef, s.n, dp_t)
+    if s.any_louver:
+        q = q * louver_series_factor(q, dp, s.n, rho_c, s.louver_beta)
+    return rho_up * q
 
 
 def opening_flows(setup: FlowSetup, pf: PathFlow) -> FlowState:
@@ -319,6 +340,7 @@ def regime_flows(
     f: np.ndarray,
     c: np.ndarray,
     n: np.ndarray,
+    k_louver: np.ndarray | float = 0.0,
 ) -> FlowState:
     """Airflow of commanded regimes (1-D batch) with the cavity air at ``t5_k``.
 
@@ -335,12 +357,14 @@ def regime_flows(
     geom : AirflowGeometry
     f, c, n : arrays (B,) or scalars
         Form-loss factor [-], power-law coefficient at OR = 1 [m3/(s Pa^n)] and exponent.
+    k_louver : array (B,) or scalar, [-]
+        The louver's loss K_L(φ), in series with the power law (already in ``f``).
 
     Returns
     -------
     FlowState
     """
-    setup = flow_setup(regime, or_, bnd, geom, f=f, c=c, n=n)
+    setup = flow_setup(regime, or_, bnd, geom, f=f, c=c, n=n, k_louver=k_louver)
     t5 = np.broadcast_to(np.asarray(t5_k, float), setup.regime.shape)
     return opening_flows(setup, path_flows(setup, t5, geom))
 

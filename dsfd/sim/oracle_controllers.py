@@ -112,18 +112,20 @@ def oracle_theta(cfg: PanelConfig, plant: Plant) -> np.ndarray:
     diagonal regimes are orifices (the full plant): there the lumped power law's c and n have
     no true value, and the config's defaults (c 0.05, n 0.6) gave a regime-5 flow less than
     half the plant's. They are the orifice law's instead: n = ½ and c = √(2/(ρ K)) with K the
-    plant's own diagonal path resistance at OR = 1 (both dampers and the cavity loss
-    f_true + K_L(φ), docs/model.md#plant-airflow), averaged over the louver positions (the
-    power law has no louver term).
+    plant's own diagonal path resistance at OR = 1 (both dampers and the cavity loss f_true,
+    docs/model.md#plant-airflow). The slats' K_L(φ) is left out when the lumped model puts it
+    in series with the power law (``model.louver_flow_loss``, docs/model.md#louver-flow-loss);
+    otherwise it is in the path and c is averaged over the louver positions.
     """
     theta = plant.params.lumped_theta(cfg)
     if plant.options.diagonal_flow != "orifice":
         return theta
     model = plant.model
     rho = cfg.model.air_density_kgm3
+    in_series = cfg.model.louver_flow_loss and cfg.louver is not None
     coefs = []
     for phi in model.phis:
-        k_l = model.louver_terms(float(phi))[1]
+        k_l = 0.0 if in_series else model.louver_terms(float(phi))[1]
         k = opening_resistance(model.openings, [1.0] * 4, [True] * 4, plant.params.f, k_l)
         coefs.append(math.sqrt(2.0 / (rho * (k[IB] + k[ET]))))
     theta[Param.C], theta[Param.N] = float(np.mean(coefs)), 0.5

@@ -6,11 +6,12 @@ import dataclasses
 
 import numpy as np
 import pytest
+from scipy.optimize import brentq
 
 from dsfd.config import load_panel
 from dsfd.config.parameters import Param
-from dsfd.physics.airflow import louver_flow_loss
-from dsfd.physics.constants import T_ZERO
+from dsfd.physics.airflow import louver_flow_loss, louver_series_factor
+from dsfd.physics.constants import R_AIR, T_ZERO
 from dsfd.physics.forcing import FacadeOptics, Forcing, OpticalLoads, step_inputs
 from dsfd.physics.model import LumpedModel
 from tests.conftest import PANELS
@@ -35,6 +36,11 @@ def _with_loss(cfg, on: bool):
 
 def _speeds(cfg, regime: int, theta: np.ndarray) -> np.ndarray:
     """Cavity speed [m/s] of one step per angle of ANGLES_DEG from the same state."""
+    return _steps(cfg, regime, theta).v_cav_ms
+
+
+def _steps(cfg, regime: int, theta: np.ndarray):
+    """One model step per angle of ANGLES_DEG from the same state (a StepResult)."""
     model = LumpedModel(cfg)
     f = _night(len(ANGLES_DEG))
     loads = FacadeOptics(cfg).loads(f, np.radians(ANGLES_DEG))
@@ -44,7 +50,7 @@ def _speeds(cfg, regime: int, theta: np.ndarray) -> np.ndarray:
     inp = inp._replace(**{k: np.asarray(getattr(inp, k))[i, i] for k in OpticalLoads._fields})
     x = np.array([[5.0, 12.0, 19.0, 10.0, 10.0, 15.5]]) + T_ZERO
     x = np.repeat(x, len(ANGLES_DEG), axis=0)
-    return model.step(x, np.full(len(i), regime), 1.0, inp, theta).v_cav_ms
+    return model.step(x, np.full(len(i), regime), 1.0, inp, theta)
 
 
 @pytest.fixture(scope="module")
@@ -77,13 +83,55 @@ def test_horizontal_slats_slow_the_stack_flow_and_closed_ones_do_not(suwon_loss,
     assert np.all(on[:3] < off[:3])
 
 
+def _k_l(cfg) -> np.ndarray:
+    lv, fac = cfg.louver, cfg.facade
+    return louver_flow_loss(np.radians(ANGLES_DEG), depth_m=fac.cavity_depth_m,
+                            slat_width_m=lv.slat_width_m, slat_pitch_m=lv.slat_pitch_m,
+                            height_m=fac.glazed_height_m)
+
+
 @pytest.mark.parametrize("regime", [5, 6, 7, 8])
-def test_power_law_regimes_keep_their_calibrated_law(suwon, regime):
-    # c and n of regimes 5-8 describe the whole path; the slats' loss is inside c
+def test_power_law_regimes_have_the_slats_in_series(suwon, regime):
+    # With n = 0.5 the power law is a quadratic loss ΔP = Q²/c², and two quadratic losses in
+    # series add: a model without the slats' loss whose c is 1/sqrt(1/c² + ρ_c K_L/(2 A_c²))
+    # carries the same flow (ρ_c of the cavity air the coupling converged to).
     theta = LumpedModel(suwon).default_theta()
-    on = _speeds(_with_loss(suwon, True), regime, theta)
-    off = _speeds(_with_loss(suwon, False), regime, theta)
-    np.testing.assert_allclose(on, off, rtol=1e-12)
+    theta[Param.N] = 0.5
+    on_cfg, off_cfg = _with_loss(suwon, True), _with_loss(suwon, False)
+    on = _speeds(on_cfg, regime, theta)
+    model = LumpedModel(on_cfg)
+    a_c = model.geom.cavity_area_m2
+    x5_end = _steps(on_cfg, regime, theta).x_next[:, 4]
+    rho_c = 101325.0 / (R_AIR * x5_end)
+    for j, k in enumerate(_k_l(suwon)):
+        th = theta.copy()
+        th[Param.C] = 1.0 / np.sqrt(1.0 / theta[Param.C] ** 2 + rho_c[j] * k / (2 * a_c**2))
+        assert _speeds(off_cfg, regime, th)[j] == pytest.approx(on[j], rel=1e-5)
+    off = _speeds(off_cfg, regime, theta)
+    assert np.all(np.abs(on[:3]) < np.abs(off[:3]))  # the slats' loss slows the path
+    assert on[3] == pytest.approx(off[3], rel=1e-9)  # vertical slats (K_L = 0) do not
+
+
+@pytest.mark.parametrize("n", [0.5, 0.6, 0.8, 1.0])
+def test_series_factor_solves_the_series_path(n):
+    # Independent reference: the root of (Q/c)^(1/n) + ρ β Q² = ΔP by bisection (brentq)
+    rho, beta = 1.2, 3.4 / (2 * 0.5**2)
+    for c in (0.002, 0.05, 0.12, 0.5):
+        for dp in np.geomspace(0.02, 20.0, 12):
+            q = c * dp**n
+            exact = brentq(lambda qq, c=c, dp=dp: (qq / c) ** (1 / n) + rho * beta * qq * qq - dp,
+                           0.0, q, xtol=1e-16, rtol=1e-14)
+            s = float(louver_series_factor(np.array(q), np.array(dp), n, rho, beta))
+            assert s * q == pytest.approx(exact, rel=3e-5)
+            # the reverse direction is the mirror image
+            assert float(louver_series_factor(np.array(-q), np.array(-dp), n, rho, beta)) == s
+
+
+def test_series_factor_is_one_without_slats_or_flow():
+    q = np.array([0.0, 1e-9, 0.05])
+    dp = np.array([0.0, 1e-8, 2.0])
+    np.testing.assert_array_equal(louver_series_factor(q, dp, 0.6, 1.2, 0.0), 1.0)
+    assert louver_series_factor(np.array(0.0), np.array(0.0), 0.6, 1.2, 6.8) == 1.0
 
 
 def test_a_panel_without_louver_has_no_slat_loss():

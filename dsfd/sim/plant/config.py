@@ -52,8 +52,9 @@ class PlantOptions:
         "1/(C_d OR A_d)² (lumped) or the IBPSA exponential damper ζ(OR)/A_d²")
     louver_flow_resistance: bool = setting(
         True, doc="docs/model.md#plant-switches, docs/model.md#louver-flow-loss: louver-angle "
-        "dependent cavity loss K_L(φ) of the orifice paths (lumped: True, the lumped model's "
-        "default model.louver_flow_loss)")
+        "dependent cavity loss K_L(φ) of the orifice paths, and in series with the power law "
+        "of diagonal_flow='power_law' (lumped: True, the lumped model's default "
+        "model.louver_flow_loss)")
     diagonal_flow: Literal["power_law", "orifice"] = setting(
         "orifice", doc="docs/model.md#plant-switches: regimes 5–8 by c·OR·|ΔP|^n (lumped) or as "
         "orifices (docs/model.md#true-parameters)")

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dsfd.physics.airflow import louver_series_factor
 from dsfd.sim.plant.physics import damper_loss_scalar
 
 EB, ET, IB, IT = 0, 1, 2, 3
@@ -127,8 +128,13 @@ class FlowPiece:
 
 
 def pair_flow(fp: FlowPiece, head: list[float], rho_b: list[float], rho_node: list[float],
-              k: list[float]) -> tuple[float, float]:
-    """Mass flow a → b [kg/s] and its slope dṁ/dΔP [kg/(s Pa)] of a two-opening path."""
+              k: list[float], louver_beta: float = 0.0) -> float:
+    """Mass flow a → b [kg/s] of a two-opening path.
+
+    ``louver_beta`` = K_L/(2 A_c²) [1/m4]: the slats' loss, in series with the power law of
+    ``diagonal_flow='power_law'`` as in the lumped model (docs/model.md#louver-flow-loss); the
+    orifice paths have it in ``k`` already.
+    """
     a, b = fp.a, fp.b
     dp = head[a] - head[b]
     if dp >= 0.0:
@@ -136,12 +142,12 @@ def pair_flow(fp: FlowPiece, head: list[float], rho_b: list[float], rho_node: li
     else:
         r_in, r_out, k_in, k_out = rho_b[b], rho_node[a], k[b], k[a]
     if fp.power:
-        coef = r_in * fp.power_coef
-        return (reg_power(dp, coef, fp.n, fp.dp_t, fp.abcd_n),
-                reg_power_slope(dp, coef, fp.n, fp.dp_t, fp.abcd_n))
+        q = reg_power(dp, fp.power_coef, fp.n, fp.dp_t, fp.abcd_n)
+        if louver_beta > 0.0:
+            q *= float(louver_series_factor(q, dp, fp.n, r_out, louver_beta))
+        return r_in * q
     coef = math.sqrt(2.0 / (k_in / r_in + k_out / r_out))
-    return (reg_power(dp, coef, 0.5, fp.dp_t, SQRT_COEF),
-            reg_power_slope(dp, coef, 0.5, fp.dp_t, SQRT_COEF))
+    return reg_power(dp, coef, 0.5, fp.dp_t, SQRT_COEF)
 
 
 def network_flows(fp: FlowPiece, head: list[float], rho_b: list[float],

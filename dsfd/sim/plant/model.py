@@ -270,7 +270,8 @@ class PlantModel:
         rho_b = [rho_o, rho_o, rho_i, rho_i]
         rho_node = [rho_bot, rho_top, rho_bot, rho_top]
         if fp.mode == PAIR:
-            m_ab, _ = pair_flow(fp, head, rho_b, rho_node, k)
+            m_ab = pair_flow(fp, head, rho_b, rho_node, k,
+                             k_l / (2.0 * self.openings.cavity_area_m2**2))
             out["m"][fp.a], out["m"][fp.b] = m_ab, -m_ab
         elif fp.mode == NETWORK:
             m, ctx.pc = network_flows(fp, head, rho_b, rho_node, k, ctx.pc)

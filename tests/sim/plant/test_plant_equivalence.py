@@ -53,7 +53,7 @@ def test_lumped_equivalent_options_are_the_e7_settings():
     assert full.n_segments == 10 and full.optics == "fine" and full.actuators == "realistic"
 
 
-@pytest.mark.parametrize("afr", [1, 3, 10])
+@pytest.mark.parametrize("afr", [1, 3, 5, 6, 10])
 def test_plant_matches_lumped_model_over_a_day(suwon, rmis, clear_day, afr):
     start, n, inputs = clear_day
     plant = Plant(suwon, PlantOptions.lumped_equivalent(), seed=4, weather_series=rmis)
@@ -73,12 +73,23 @@ def test_plant_matches_lumped_model_over_a_day(suwon, rmis, clear_day, afr):
     diff = (x - lumped.x[0, 1:])[SETTLE_STEPS:]
     assert np.abs(diff).max(axis=0).max() < 0.15, np.abs(diff).max(axis=0)
     assert np.sqrt((diff**2).mean(axis=0)).max() < 0.03, np.sqrt((diff**2).mean(axis=0))
-    # The flows agree as well (same orifice law, same column, same θ); pointwise only
-    # roughly, because near ΔP = 0 the flow is very sensitive to the cavity temperature.
+    # The flows agree as well (same flow law, same column, same θ); pointwise only
+    # roughly, because near ΔP = 0 the flow is very sensitive to the cavity temperature, and
+    # in the diagonal regimes the speed ramps by up to 0.05 m/s a step in the morning (the
+    # plant's end-of-step speed against the lumped step's): 2-4 % of their steps differ by
+    # more than 0.02 m/s, the median by 0.001-0.002.
     v_lumped = lumped.v_cav_ms[0, SETTLE_STEPS:]
-    np.testing.assert_allclose(v[SETTLE_STEPS:], v_lumped, atol=0.02)
+    dv = np.abs(v[SETTLE_STEPS:] - v_lumped)
+    if afr in (5, 6):
+        assert np.percentile(dv, 90) < 0.02 and np.median(dv) < 0.003
+    else:
+        np.testing.assert_allclose(v[SETTLE_STEPS:], v_lumped, atol=0.02)
+    # On the day's mean speed they agree to 0.12 % or better; in the diagonal regimes the
+    # slats' loss in series with the power law (docs/model.md#louver-flow-loss) moves it by
+    # 1 % at this louver angle, so it has to be in both for 0.3 %.
+    tol = 0.003 if afr in (5, 6) else 0.01
     assert abs(np.abs(v[SETTLE_STEPS:]).mean() - np.abs(v_lumped).mean()) <= (
-        0.01 * np.abs(v_lumped).mean() + 1e-9)
+        tol * np.abs(v_lumped).mean() + 1e-9)
     if afr == 10:
         assert np.all(v == 0.0)
     # The room-side heat (docs/model.md#room-heat) integrated inside the plant equals the lumped

@@ -145,8 +145,31 @@ def test_pair_closed_form_equals_the_one_node_solver():
     # law is regularised in the path ΔP, the solver per opening — docs/model.md#regularisation.)
     for head in ([0.3, -33.9, 0.0, -32.2], [0.0, -34.6, 0.0, -32.2], [0.5, 0.0, 0.0, 0.1]):
         for a, b in ((0, 1), (2, 3), (2, 1), (0, 3)):
-            m_ab, _ = pair_flow(FlowPiece(PAIR, a=a, b=b), head, rho_b, rho_node, k)
+            m_ab = pair_flow(FlowPiece(PAIR, a=a, b=b), head, rho_b, rho_node, k)
             m, _ = network_flows(FlowPiece(NETWORK, active=(a, b)), head, rho_b, rho_node, k,
                                  0.0)
             assert m[a] == pytest.approx(m_ab, rel=1e-9, abs=1e-12)
             assert m[b] == pytest.approx(-m_ab, rel=1e-9, abs=1e-12)
+
+
+def test_pair_power_law_has_the_slats_in_series():
+    """diagonal_flow='power_law' (lumped equivalence): the slats' loss ρ β Q² takes its share
+    of the path's ΔP as in the lumped model (docs/model.md#louver-flow-loss); reference: the
+    root of (Q/c)^(1/n) + ρ β Q² = ΔP by bisection."""
+    from scipy.optimize import brentq
+
+    from dsfd.sim.plant.flow import PAIR, FlowPiece, pair_flow, reg_coefficients
+
+    rho_b, rho_node = [1.27, 1.27, 1.19, 1.19], [1.15, 1.12, 1.15, 1.12]
+    c, n, beta = 0.12, 0.6, 3.4 / (2 * 0.5**2)
+    fp = FlowPiece(PAIR, a=2, b=1, power=True, power_coef=c, n=n, abcd_n=reg_coefficients(n))
+    for dp in (0.05, 0.8, 6.0):
+        head = [0.0, -dp, 0.0, 0.0]
+        q = brentq(lambda qq, dp=dp: (qq / c) ** (1 / n) + rho_node[1] * beta * qq * qq - dp,
+                   0.0, c * dp**n, xtol=1e-16, rtol=1e-14)
+        m = pair_flow(fp, head, rho_b, rho_node, [1.0] * 4, beta)
+        assert m == pytest.approx(rho_b[2] * q, rel=3e-5)
+        assert m < pair_flow(fp, head, rho_b, rho_node, [1.0] * 4)  # slower than without
+        # reversed driving pressure: the mirror flow (inflow density of the other side)
+        back = pair_flow(fp, [0.0, dp, 0.0, 0.0], rho_b, rho_node, [1.0] * 4, beta)
+        assert back < 0
