@@ -123,9 +123,9 @@ def oracle_theta(cfg: PanelConfig, plant: Plant) -> np.ndarray:
     model = plant.model
     rho = cfg.model.air_density_kgm3
     in_series = cfg.model.louver_flow_loss and cfg.louver is not None
+    k_louver = [0.0] if in_series else [model.louver_terms(float(phi))[1] for phi in model.phis]
     coefs = []
-    for phi in model.phis:
-        k_l = 0.0 if in_series else model.louver_terms(float(phi))[1]
+    for k_l in k_louver:
         k = opening_resistance(model.openings, [1.0] * 4, [True] * 4, plant.params.f, k_l)
         coefs.append(math.sqrt(2.0 / (rho * (k[IB] + k[ET]))))
     theta[Param.C], theta[Param.N] = float(np.mean(coefs)), 0.5

@@ -53,6 +53,14 @@ def _steps(cfg, regime: int, theta: np.ndarray):
     return model.step(x, np.full(len(i), regime), 1.0, inp, theta)
 
 
+def _k_l(cfg) -> np.ndarray:
+    """K_L(φ) [-] of the panel's louver at each angle of ANGLES_DEG."""
+    lv, fac = cfg.louver, cfg.facade
+    return louver_flow_loss(np.radians(ANGLES_DEG), depth_m=fac.cavity_depth_m,
+                            slat_width_m=lv.slat_width_m, slat_pitch_m=lv.slat_pitch_m,
+                            height_m=fac.glazed_height_m)
+
+
 @pytest.fixture(scope="module")
 def suwon_loss(suwon):
     return _with_loss(suwon, True)
@@ -60,12 +68,9 @@ def suwon_loss(suwon):
 
 def test_the_loss_is_the_form_loss_it_adds_to(suwon):
     # K_L on top of f is the same path as a model without K_L whose f is f + K_L(φ)
-    lv, fac = suwon.louver, suwon.facade
     theta = LumpedModel(suwon).default_theta()
     on = _speeds(_with_loss(suwon, True), 1, theta)
-    k_l = louver_flow_loss(np.radians(ANGLES_DEG), depth_m=fac.cavity_depth_m,
-                           slat_width_m=lv.slat_width_m, slat_pitch_m=lv.slat_pitch_m,
-                           height_m=fac.glazed_height_m)
+    k_l = _k_l(suwon)
     off_cfg = _with_loss(suwon, False)
     for j, k in enumerate(k_l):
         th = theta.copy()
@@ -81,13 +86,6 @@ def test_horizontal_slats_slow_the_stack_flow_and_closed_ones_do_not(suwon_loss,
     assert on[0] < on[1] < on[3]           # |cos φ| 1 > 0.81 > 0: less free section, slower
     assert on[3] == pytest.approx(off[3], rel=1e-9)
     assert np.all(on[:3] < off[:3])
-
-
-def _k_l(cfg) -> np.ndarray:
-    lv, fac = cfg.louver, cfg.facade
-    return louver_flow_loss(np.radians(ANGLES_DEG), depth_m=fac.cavity_depth_m,
-                            slat_width_m=lv.slat_width_m, slat_pitch_m=lv.slat_pitch_m,
-                            height_m=fac.glazed_height_m)
 
 
 @pytest.mark.parametrize("regime", [5, 6, 7, 8])
