@@ -303,6 +303,11 @@ class ModelOptions:
         "which is what a mid-height probe reads and what sets the stack; the air leaves at "
         "T_in + k (x5 − T_in), 1 < k ≤ 2) or 'well_mixed' (the paper's model: the air leaves "
         "at x5)")
+    louver_diffuse: Literal["sky_ground", "uniform"] = setting(
+        "sky_ground", doc="How the outdoor diffuse light that the exterior pane transmits meets "
+        "the louver: 'sky_ground' (its sky and ground parts with the slats' own properties for "
+        "each, docs/model.md#louver-diffuse: slats tilted up see the bright sky, tilted down "
+        "the dim ground) or 'uniform' (the paper's model: one hemispherical average)")
     air_density_kgm3: float = setting(1.19, doc="Air density for heat capacities", unit="kg/m3",
                                       gt=0)
     air_heat_capacity_jkgk: float = setting(1006.0, doc="c_p of air", unit="J/(kg K)", gt=0)

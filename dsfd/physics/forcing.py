@@ -20,6 +20,7 @@ model steps with.
 
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import NamedTuple
 
 import numpy as np
@@ -35,7 +36,13 @@ from dsfd.physics.longwave import (
     sky_temperature_clark_allen,
     sky_temperature_swinbank,
 )
-from dsfd.physics.optics import NO_LOUVER, LouverOptics, glass_triples, layer_absorption
+from dsfd.physics.optics import (
+    NO_LOUVER,
+    LouverOptics,
+    SlatSkyGround,
+    glass_triples,
+    layer_absorption,
+)
 from dsfd.physics.solar import erbs, extraterrestrial_irradiance, facade_irradiance, solar_position
 
 #: Wind-profile exponent a and boundary-layer thickness δ [m] by terrain (EnergyPlus
@@ -66,6 +73,7 @@ class Forcing(NamedTuple):
     ghi_wm2: np.ndarray
     dni_wm2: np.ndarray
     dhi_wm2: np.ndarray
+    ground_wm2: np.ndarray  # the ground-reflected part of diffuse_wm2
 
     def window(self, start: int, stop: int) -> Forcing:
         """Steps ``start`` … ``stop − 1``."""
@@ -119,12 +127,17 @@ def facade_forcing(cfg: PanelConfig, w: WeatherInputs, *,
         t_sky = sky_temperature_clark_allen(w.t_out_k, sky_dew_point_k(w), 0.0)
     else:
         t_sky = sky_temperature_swinbank(w.t_out_k)
-    beam, diffuse = fi.beam, fi.sky_diffuse + fi.ground_diffuse
+    beam, diffuse, ground = fi.beam, fi.sky_diffuse + fi.ground_diffuse, fi.ground_diffuse
     if poa is not None:
         use, total, diff = poa
         front = (fi.aoi_deg < 90.0) & ~below
         beam = np.where(use, np.where(front, np.clip(total - diff, 0.0, None), 0.0), beam)
         diffuse = np.where(use, np.where(front, diff, total), diffuse)
+        # The ground's share of measured façade diffuse: from GHI and the albedo where GHI
+        # is measured too, else half, which is what uniform diffuse radiance gives.
+        has_ghi = np.isfinite(np.asarray(w.ghi_wm2, float))
+        ground = np.where(use, np.where(has_ghi, np.minimum(ground, diffuse), 0.5 * diffuse),
+                          ground)
     geom = AirflowGeometry.from_sections(cfg.openings, cfg.facade)
     cp_b, cp_t = geom.wind_pressure_coefficients(w.wind_dir_deg, fac.azimuth_deg)
     return Forcing(
@@ -147,6 +160,7 @@ def facade_forcing(cfg: PanelConfig, w: WeatherInputs, *,
         ghi_wm2=ghi,
         dni_wm2=dni,
         dhi_wm2=dhi,
+        ground_wm2=ground,
     )
 
 
@@ -190,6 +204,22 @@ class OpticalLoads(NamedTuple):
     cavity_loss: np.ndarray
 
 
+#: Nodes of the louver's sky / ground table: every degree from -90° to +90°.
+SKY_GROUND_NODES = 181
+
+
+@lru_cache(maxsize=8)
+def sky_ground_table(louver: LouverOptics) -> np.ndarray:
+    """``louver.sky_ground`` at every whole degree from −90° to +90° → (181, 6).
+
+    Each angle costs 128 slat-cell beam evaluations (docs/model.md#louver-diffuse), too many
+    for every decision; a process builds the table once per louver and band.
+    """
+    table = np.stack(louver.sky_ground(np.radians(np.arange(SKY_GROUND_NODES) - 90.0)), axis=-1)
+    table.flags.writeable = False
+    return table
+
+
 class FacadeOptics:
     """Short- and long-wave optics of one panel, evaluated for arrays of louver angles."""
 
@@ -207,6 +237,22 @@ class FacadeOptics:
         self.eps_2f = gl.interior_outer.emissivity_front
         self.area = cfg.facade.width_m * cfg.facade.glazed_height_m
         self.floor = cfg.facade.width_m * cfg.room.floor_depth_m
+        self.split_diffuse = (cfg.louver is not None
+                              and cfg.model.louver_diffuse == "sky_ground")
+
+    def sky_ground(self, phi_rad: np.ndarray) -> tuple[SlatSkyGround, SlatSkyGround]:
+        """Sky / ground properties of the slats at ``phi_rad`` [rad] (solar, visible), shape
+        of ``phi_rad``: linear in φ between the 1° nodes of :func:`sky_ground_table` (exact
+        on the 18° motor grid; within 4e-4 of the direct quadrature between nodes)."""
+        deg = np.clip(np.degrees(np.asarray(phi_rad, float)), -90.0, 90.0) + 90.0
+        i = np.minimum(deg.astype(int), SKY_GROUND_NODES - 2)
+        w = (deg - i)[..., None]
+        out = []
+        for louver in (self.louver_solar, self.louver_visible):
+            table = sky_ground_table(louver)
+            out.append(SlatSkyGround(*np.moveaxis((1.0 - w) * table[i] + w * table[i + 1],
+                                                  -1, 0)))
+        return out[0], out[1]
 
     def lw_exchange(self, phi_rad: np.ndarray) -> np.ndarray:
         """(R_14, R_12, R_42) for louver angles ``phi_rad`` [rad] → shape (..., 3)."""
@@ -225,8 +271,14 @@ class FacadeOptics:
         profile = np.radians(forcing.profile_deg)
         common = dict(beam=forcing.beam_wm2, diffuse=forcing.diffuse_wm2, cos_aoi=cos_aoi,
                       phi=phi_b, profile=profile)
-        sol = layer_absorption(**common, glass=self.glass_solar, louver=self.louver_solar)
-        vis = layer_absorption(**common, glass=self.glass_visible, louver=self.louver_visible)
+        split_sol = split_vis = None
+        if self.split_diffuse:
+            split_sol, split_vis = self.sky_ground(phi_b)
+            common["diffuse_ground"] = forcing.ground_wm2
+        sol = layer_absorption(**common, glass=self.glass_solar, louver=self.louver_solar,
+                               sky_ground=split_sol)
+        vis = layer_absorption(**common, glass=self.glass_visible, louver=self.louver_visible,
+                               sky_ground=split_vis)
         shape = np.broadcast_shapes(phi_b.shape, forcing.beam_wm2.shape)
         sources = np.stack([np.broadcast_to(s, shape) for s in (sol.s1, sol.s2, sol.s3,
                                                                   sol.s4)], axis=-1)

@@ -139,6 +139,7 @@ def layer_absorption(
     glass: tuple[GlassTriple, GlassTriple, GlassTriple],
     louver: LouverOptics | NoLouverOptics | None = None,
     diffuse_ground: ArrayLike | None = None,
+    sky_ground: SlatSkyGround | None = None,
 ) -> LayerSources:
     """Absorbed, transmitted and reflected short-wave power of the four DSF layers.
 
@@ -162,8 +163,11 @@ def layer_absorption(
     diffuse_ground : array_like, optional
         Ground-reflected part of ``diffuse`` [W/m2]. When given, the outdoor diffuse that
         L1 transmits reaches the louver with the sky / ground properties of docs/model.md#slat-cell
-        instead of the uniform-diffuse ones (truth plant; 128 extra beam evaluations per slat
-        angle).
+        instead of the uniform-diffuse ones (docs/model.md#louver-diffuse; 128 extra beam
+        evaluations per slat angle).
+    sky_ground : SlatSkyGround, optional
+        The louver's sky / ground properties at ``phi`` (``louver.sky_ground(phi)``), when
+        the caller keeps them for repeated angles; used only with ``diffuse_ground``.
 
     Returns
     -------
@@ -221,7 +225,8 @@ def layer_absorption(
     if diffuse_ground is None:  # outdoor diffuse transmitted by L1: uniform
         gaps = gaps._replace(inward_1=h1.T * diffuse)
     else:  # or as sky + ground "pseudo-beams"
-        layers, gaps = _sky_and_ground(layers, gaps, lv.sky_ground(phi), h1.T * diffuse,
+        split = lv.sky_ground(phi) if sky_ground is None else sky_ground
+        layers, gaps = _sky_and_ground(layers, gaps, split, h1.T * diffuse,
                                        h1.T * np.asarray(diffuse_ground, dtype=float))
     F1, F2, F3, B1, B2, B3 = _diffuse_fluxes(glass_system, front, back, gaps)
     s1 = layers.s1 + h1.A_f * diffuse + h1.A_b * B1

@@ -27,7 +27,8 @@ def _night(n_angles: int) -> Forcing:
                    p_atm_pa=101325.0 * one, wind_ms=0 * one, cp_bottom=0.3 * one,
                    cp_top=0.3 * one, zenith_deg=90.0 * one, azimuth_deg=180.0 * one,
                    aoi_deg=90.0 * one, profile_deg=0 * one, beam_wm2=0 * one,
-                   diffuse_wm2=0 * one, ghi_wm2=0 * one, dni_wm2=0 * one, dhi_wm2=0 * one)
+                   diffuse_wm2=0 * one, ghi_wm2=0 * one, dni_wm2=0 * one, dhi_wm2=0 * one,
+                   ground_wm2=0 * one)
 
 
 def _with_loss(cfg, on: bool):

@@ -29,7 +29,7 @@ def _forcing(*, t_out=0.0, t_in=22.0, beam=0.0, diffuse=0.0, wind=0.0, sky_drop=
                    cp_top=0.3 * one, zenith_deg=59.18 * one, azimuth_deg=168.79 * one,
                    aoi_deg=32.6 * one, profile_deg=31.3 * one, beam_wm2=beam * one,
                    diffuse_wm2=diffuse * one, ghi_wm2=0 * one, dni_wm2=0 * one,
-                   dhi_wm2=0 * one)
+                   dhi_wm2=0 * one, ground_wm2=0.5 * diffuse * one)  # uniform radiance
 
 
 @pytest.fixture(scope="module")

@@ -225,8 +225,10 @@ def _knots_fine(cfg: PanelConfig, options: PlantOptions, w: WeatherInputs,
                            louver=NO_LOUVER if louver is None else louver,
                            diffuse_ground=ground)
     m, n = phis_rad.size, fi.beam.size
-    # Q_DA is a lighting proxy (docs/model.md#q-da [ENG]): the lumped visible optics serve it.
-    optics = FacadeOptics(cfg)
+    # Q_DA is a lighting proxy (docs/model.md#q-da [ENG]): the lumped visible optics serve it,
+    # with the sky and ground diffuse split like the solar band here, whatever the model does.
+    optics = FacadeOptics(dataclasses.replace(
+        cfg, model=dataclasses.replace(cfg.model, louver_diffuse="sky_ground")))
     q_da = optics.loads(facade_forcing(cfg, w), phis_rad).q_da_w / optics.area
     sources = np.stack([np.broadcast_to(s, (m, n)) for s in (sol.s1, sol.s2, sol.s3, sol.s4,
                                                              sol.transmitted, q_da)], axis=-1)
