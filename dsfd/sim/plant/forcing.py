@@ -16,10 +16,10 @@ linear / step                 weather at the start / end; sun at the midpoint
 ============================  ==========================================================
 
 Optics (docs/model.md#plant-switches): ``lumped`` reuses the lumped model's forcing
-(Erbs + Hay–Davies, M = 5, uniform diffuse) so the N = 1 equivalence (docs/model.md#plant-switches)
-holds by construction; ``fine`` uses the measured DNI/DHI where the file has them (else DIRINT),
-Perez 1990, M = 10 segments with the slat thickness correction and the sky/ground diffuse split
-(docs/model.md#plant-forcing, docs/model.md#plant-heat-transfer).
+(Erbs + Hay–Davies, M = 5, the model's ``louver_diffuse``) so the N = 1 equivalence
+(docs/model.md#plant-switches) holds by construction; ``fine`` uses the measured DNI/DHI where
+the file has them (else DIRINT), Perez 1990, M = 10 segments with the slat thickness correction
+and the sky/ground diffuse split (docs/model.md#plant-forcing, docs/model.md#plant-heat-transfer).
 """
 
 from __future__ import annotations
