@@ -10,8 +10,10 @@ the same window under every controller of :data:`CONTROLLERS`:
   parameters mapped to the lumped model (it still plans on the lumped model);
 * ``plant-oracle``: decisions by rollouts on the truth plant itself
   (:mod:`dsfd.sim.oracle_search`) — the reference the controller is judged by;
-* ``mpc-true-weather``, ``mpc-true-state``: ``mpc`` given one piece of the oracle's
-  information, to split the shortfall into forecast, state estimate and model.
+* ``mpc-true-weather``, ``mpc-true-state``, ``mpc-true-params``: ``mpc`` given one piece of
+  the oracle's information (the horizon's weather, the plant's state, or the plant's
+  parameters mapped to the lumped model), to split the shortfall into forecast, state
+  estimate and parameters.
 
 Every run starts a warm-up before the scored day — a quarter of the scored duration, at most
 ``warmup_h`` — clipped to the start of the record, so the on-line calibration has data
@@ -47,7 +49,8 @@ from dsfd.weather import WeatherSeries
 
 __all__ = ["CASES", "CONTROLLERS", "DayClass", "bench_closed_loop", "classify_days", "report"]
 
-CONTROLLERS = ("rule", "mpc", "oracle", "plant-oracle", "mpc-true-weather", "mpc-true-state")
+CONTROLLERS = ("rule", "mpc", "oracle", "plant-oracle", "mpc-true-weather", "mpc-true-state",
+               "mpc-true-params")
 SKIES = ("clear", "mixed", "overcast")
 SEASONS = ("heating", "cooling")
 CASES = tuple(f"{sky}-{season}" for sky in SKIES for season in SEASONS)

@@ -165,7 +165,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "(repeatable; default all six)")
     p.add_argument("--controllers", default=None,
                    help="closed-loop: comma-separated controllers (default rule, mpc, oracle, "
-                   "plant-oracle, mpc-true-weather, mpc-true-state)")
+                   "plant-oracle, mpc-true-weather, mpc-true-state, mpc-true-params)")
     p.add_argument("--json", type=Path, default=None, help="write the figures as JSON")
     p.set_defaults(handler=run)
 

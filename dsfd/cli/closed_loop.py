@@ -31,8 +31,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    "fixed command (fixed: --phi-deg/--afr/--or-pct, default 0 deg, regime 10)"
                    ", the optimiser with perfect information (oracle), an offline reference "
                    "that plans by rollouts on the truth plant itself (plant-oracle), or mpc "
-                   "given only the true weather or only the true state (mpc-true-weather, "
-                   "mpc-true-state)")
+                   "given only the true weather, only the true state or only the plant's "
+                   "parameters (mpc-true-weather, mpc-true-state, mpc-true-params)")
     g.add_argument("--calibration", choices=CALIBRATIONS, default="online",
                    help="on-line self-calibration (default), frozen --params (offline) or the "
                    "panel defaults (none)")

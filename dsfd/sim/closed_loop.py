@@ -23,8 +23,10 @@ Controllers:
   true weather (:mod:`dsfd.sim.oracle_search`), within the same actuator grid, horizon, move
   penalty and safety pipeline;
 * ``mpc-true-weather``, ``mpc-true-state`` — ``mpc`` (with its calibration) given one piece
-  of the oracle's information: the true weather of the horizon, or the plant's true state.
-  They split what the oracle gains into forecast, state estimate and model.
+  of the oracle's information: the true weather of the horizon, or the plant's true state;
+  ``mpc-true-params`` — ``mpc`` (observer, persistence forecast) with the oracle's
+  parameters frozen instead of the on-line calibration.
+  They split what the oracle gains into forecast, state estimate and parameters.
 
 Calibration: ``online`` (the daemon's on-line self-calibration), ``offline`` (θ̂ from a
 ``dsfd calibrate`` parameter file, frozen) or ``none`` (the panel's defaults, frozen).
@@ -121,7 +123,8 @@ class ClosedLoopSettings:
     """
 
     controller: Literal["mpc", "paper-sqp", "rule", "fixed", "oracle", "plant-oracle",
-                        "mpc-true-weather", "mpc-true-state"] = "mpc"
+                        "mpc-true-weather", "mpc-true-state",
+                        "mpc-true-params"] = "mpc"
     calibration: Literal["online", "offline", "none"] = "online"
     seed: int = 1
     hours: float | None = None
@@ -243,7 +246,8 @@ def _controller_config(cfg: PanelConfig, controller: str) -> PanelConfig:
     """The panel as the run's controller sees it: its optimiser, and the stage budgets lifted
     (:data:`SIM_BUDGET_S`)."""
     optimiser = {"mpc": "mpc", "oracle": "mpc", "paper-sqp": "paper-sqp", "rule": "rule",
-                 "plant-oracle": "mpc", "mpc-true-weather": "mpc", "mpc-true-state": "mpc"}
+                 "plant-oracle": "mpc", "mpc-true-weather": "mpc", "mpc-true-state": "mpc",
+                 "mpc-true-params": "mpc"}
     control = dataclasses.replace(cfg.control, optimiser=optimiser.get(controller, "rule"),
                                   time_budget_s=SIM_BUDGET_S)
     daemon = dataclasses.replace(cfg.daemon, calibrate_budget_s=SIM_BUDGET_S,

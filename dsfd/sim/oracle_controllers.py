@@ -1,5 +1,6 @@
 """The closed loop's controllers with perfect information (``oracle``, ``plant-oracle``,
-``mpc-true-weather``, ``mpc-true-state``) and the frozen calibration of ``offline``, ``none``
+``mpc-true-weather``, ``mpc-true-state``; ``mpc-true-params`` is the plain cycle with the
+oracle's parameters) and the frozen calibration of ``offline``, ``none``
 and the oracles: the daemon's :class:`~dsfd.daemon.loop.Controller` with its state estimate,
 forecast or optimiser taken from the truth plant (:mod:`dsfd.sim.closed_loop` runs them).
 """

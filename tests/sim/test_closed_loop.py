@@ -29,8 +29,9 @@ def _run(cfg, rmis_raw, rmis, controller, *, hours=1.5, day=1, at_h=10.0, **kw):
     """A run from ``at_h`` hours after the first minute of RMIS day ``day`` (2 January is
     the clear day; at_h=10 is late morning at the Suwon panel)."""
     start = day_start(rmis, day) + at_h * HOUR
-    settings = ClosedLoopSettings(controller=controller, calibration="none", hours=hours,
-                                  start_s=start, options=FAST, seed=3, **kw)
+    kw.setdefault("calibration", "none")
+    settings = ClosedLoopSettings(controller=controller, hours=hours, start_s=start,
+                                  options=FAST, seed=3, **kw)
     return run_closed_loop(cfg, rmis_raw, settings)
 
 
@@ -101,6 +102,26 @@ def test_oracle_plans_with_the_true_state(suwon, rmis_raw, rmis):
     oracle = _run(suwon, rmis_raw, rmis, "oracle", hours=0.5)
     assert oracle.methods["mpc"] == oracle.cycles  # never fell back: the state is known
     assert oracle.calibration_updates == 0
+
+
+def test_mpc_true_params_plans_with_the_plants_parameters_and_its_own_observer(suwon, rmis_raw,
+                                                                              rmis):
+    """The split's parameter leg: the oracle's θ frozen (asked for on-line calibration, it
+    still never updates), with mpc's observer and persistence forecast."""
+    from dsfd.config.parameters import N_PARAMS
+    from dsfd.estimation.params import ParameterSpace
+    from dsfd.estimation.state import CalibrationState
+    from dsfd.sim.oracle_controllers import oracle_theta
+    from dsfd.sim.plant.plant import Plant
+    from dsfd.sim.replay import at_site
+
+    run = _run(suwon, rmis_raw, rmis, "mpc-true-params", hours=0.5, calibration="online")
+    plant = Plant(suwon, FAST, seed=3, weather_series=at_site(rmis_raw, suwon))
+    assert run.calibration_updates == 0
+    np.testing.assert_allclose(run.final_theta[:N_PARAMS], oracle_theta(suwon, plant)[:N_PARAMS])
+    defaults = CalibrationState.initial(suwon.panel.id, ParameterSpace.from_panel(suwon)).theta
+    assert not np.allclose(run.final_theta[:N_PARAMS], defaults[:N_PARAMS])
+    assert run.methods["mpc"] >= 1
 
 
 @pytest.mark.parametrize(("args", "message"), [
