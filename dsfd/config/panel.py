@@ -303,6 +303,11 @@ class ModelOptions:
         "which is what a mid-height probe reads and what sets the stack; the air leaves at "
         "T_in + k (x5 − T_in), 1 < k ≤ 2) or 'well_mixed' (the paper's model: the air leaves "
         "at x5)")
+    diagonal_flow: Literal["power_law", "orifice"] = setting(
+        "power_law", doc="Flow law of the diagonal regimes 5-8 (docs/model.md#diagonal-flow): "
+        "'power_law' (the paper's Q = c OR |Δp|^n, with c and n calibrated only while a "
+        "diagonal regime runs) or 'orifice' (the two dampers and the cavity's form loss f in "
+        "series, as regimes 1-4: c and n are not used, and every regime but 10 informs f)")
     louver_diffuse: Literal["sky_ground", "uniform"] = setting(
         "sky_ground", doc="How the outdoor diffuse light that the exterior pane transmits meets "
         "the louver: 'sky_ground' (its sky and ground parts with the slats' own properties for "

@@ -16,11 +16,12 @@ The fit vector is ϑ = (θ, q) with
 Which components a fit may move:
 
 * never — what the panel cannot excite: h_ca2 and q_x4 without a louver; f when no regime
-  of 1–4 or 9 (orifice paths) is available; c and n when none of 5–8 is; and those listed
-  in ``calibration.fixed``;
-* per window — f only from windows containing a regime 1–4 or 9, c and n only from windows
-  containing a regime 5–8, q_xi only when x_i is measured in the window (the others are
-  held at their prior).
+  of 1–4 or 9 (orifice paths) is available; c and n when none of 5–8 is, or when 5–8 are
+  orifice paths too (``model.diagonal_flow: orifice``, docs/model.md#diagonal-flow); and
+  those listed in ``calibration.fixed``;
+* per window — f only from windows containing an orifice path (1–4 and 9, and 5–8 under
+  ``diagonal_flow: orifice``), c and n only from windows containing a regime 5–8, q_xi
+  only when x_i is measured in the window (the others are held at their prior).
 """
 
 from __future__ import annotations
@@ -85,6 +86,9 @@ class ParameterSpace:
         Random-walk growth of the prior spread per √hour, fitting coordinates.
     fixed : ndarray (13,), bool
         Never calibrated on this panel.
+    orifice_regimes : frozenset of int
+        Regimes whose flow uses f (:data:`ORIFICE_REGIMES`, and 5–8 under
+        ``model.diagonal_flow: orifice``).
     """
 
     default: np.ndarray
@@ -94,6 +98,7 @@ class ParameterSpace:
     prior_sd: np.ndarray
     drift_sd: np.ndarray
     fixed: np.ndarray
+    orifice_regimes: frozenset[int] = ORIFICE_REGIMES
 
     @classmethod
     def from_panel(cls, cfg: PanelConfig, settings: Calibration | None = None) -> ParameterSpace:
@@ -111,15 +116,17 @@ class ParameterSpace:
                             s.drift_log_sd_per_h)
         fixed = np.array([k in s.fixed for k in FIT_NAMES])
         regimes = set(cfg.openings.available_regimes())
+        diagonal_orifice = cfg.model.diagonal_flow == "orifice"
+        orifice = ORIFICE_REGIMES | POWER_LAW_REGIMES if diagonal_orifice else ORIFICE_REGIMES
         if cfg.louver is None:
             fixed[[Param.H_CA2, Param.Q_X4]] = True
-        if not regimes & ORIFICE_REGIMES:
+        if not regimes & orifice:
             fixed[Param.F] = True
-        if not regimes & POWER_LAW_REGIMES:
+        if diagonal_orifice or not regimes & POWER_LAW_REGIMES:
             fixed[[Param.C, Param.N]] = True
         if not s.heat_offsets:
             fixed[I_Q] = True
-        return cls(default, lower, upper, is_log, prior_sd, drift_sd, fixed)
+        return cls(default, lower, upper, is_log, prior_sd, drift_sd, fixed, orifice)
 
     # ----------------------------------------------------------------- coordinates
     def to_z(self, theta: np.ndarray) -> np.ndarray:
@@ -160,7 +167,7 @@ class ParameterSpace:
         """
         present = set(np.unique(np.asarray(regimes, int)).tolist())
         free = ~self.fixed
-        if not present & ORIFICE_REGIMES:
+        if not present & self.orifice_regimes:
             free[Param.F] = False
         if not present & POWER_LAW_REGIMES:
             free[[Param.C, Param.N]] = False

@@ -155,7 +155,8 @@ class LumpedModel:
                            AirflowBoundary(*(np.ravel(v) for v in air)), self.geom,
                            f=(theta[..., Param.F] + inp.cavity_loss).ravel(),
                            c=theta[..., Param.C].ravel(), n=theta[..., Param.N].ravel(),
-                           k_louver=np.broadcast_to(inp.cavity_loss, shape).ravel())
+                           k_louver=np.broadcast_to(inp.cavity_loss, shape).ravel(),
+                           diagonal_orifice=self.cfg.model.diagonal_flow == "orifice")
         return setup.reshape(shape)
 
     def _batch(self, shape: tuple[int, ...], regime, or_, inputs: StepInputs, theta):

@@ -142,12 +142,14 @@ def flow_setup(
     c: np.ndarray,
     n: np.ndarray,
     k_louver: np.ndarray | float = 0.0,
+    diagonal_orifice: bool = False,
 ) -> FlowSetup:
     """Precompute the cavity-temperature-independent flow data of a batch (see flows_at).
 
     ``f`` is the whole form loss of the orifice regimes (the louver's K_L included);
     ``k_louver`` [-] is K_L(φ) alone, put in series with the power law of regimes 5–8
-    (docs/model.md#louver-flow-loss).
+    (docs/model.md#louver-flow-loss). ``diagonal_orifice``: regimes 5–8 are orifice paths
+    too (docs/model.md#diagonal-flow; c and n unused).
     """
     regime = np.asarray(regime, dtype=int).ravel()
     nb = regime.size
@@ -160,6 +162,8 @@ def flow_setup(
     p_b, rho_b, t_b = boundary_state(bnd_b, geom)
     k_all = opening_resistance(or_b, f_b, geom)
     inlet, outlet, law = _INLET[regime], _OUTLET[regime], _LAW[regime]
+    if diagonal_orifice:
+        law = np.where(law == _LAW_POWER, _LAW_ORIFICE, law)
     rows = np.arange(nb)
     z = geom.z_m
     or_eff = np.maximum(or_b, geom.min_opening_ratio)

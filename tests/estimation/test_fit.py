@@ -143,3 +143,19 @@ def test_a_window_that_frees_one_flow_parameter_alone_is_fitted(suwon):
     f = PARAMETER_NAMES.index("f")
     assert fit.success
     assert abs(state.theta[f] / theta[f] - 1.0) < 0.05
+
+
+def test_diagonal_orifice_regimes_inform_f_and_leave_c_n_alone(suwon):
+    """Under model.diagonal_flow: orifice a diagonal regime's flow goes through f (as
+    regimes 1-4 and 9) and c, n are in no flow law: a window of regime 5 frees f and never
+    c, n; under the paper's power law it is the other way round."""
+    orifice = dataclasses.replace(suwon, model=dataclasses.replace(suwon.model,
+                                                                   diagonal_flow="orifice"))
+    regime5 = np.full(30, 5)
+    power_free = ParameterSpace.from_panel(suwon).free_in_window(regime5)
+    orifice_space = ParameterSpace.from_panel(orifice)
+    orifice_free = orifice_space.free_in_window(regime5)
+    assert power_free[[Param.C, Param.N]].all() and not power_free[Param.F]
+    assert orifice_free[Param.F] and not orifice_free[[Param.C, Param.N]].any()
+    assert orifice_space.fixed[[Param.C, Param.N]].all()
+    assert not orifice_space.free_in_window(np.full(30, 10))[Param.F]

@@ -181,6 +181,12 @@ def test_the_oracles_power_law_is_the_plants_diagonal_orifice(suwon, rmis_raw, r
     nominal = v_model(plant.params.lumped_theta(suwon))
     assert 0.8 < mapped / v_plant < 1.25
     assert nominal / v_plant < 0.6
+    # With the diagonal regimes as orifices (model.diagonal_flow), the plant's own f is
+    # enough: c and n are not used, so the nominal θ predicts the plant's speed too.
+    orifice_cfg = dataclasses.replace(
+        suwon, model=dataclasses.replace(suwon.model, diagonal_flow="orifice"))
+    model = LumpedModel(orifice_cfg)
+    assert 0.8 < v_model(plant.params.lumped_theta(suwon)) / v_plant < 1.25
 
 
 def test_bench_closed_loop_names_an_unknown_controller_and_runs_nothing(tmp_path):
