@@ -245,10 +245,10 @@ class ClosedLoopResult:
 def _controller_config(cfg: PanelConfig, controller: str) -> PanelConfig:
     """The panel as the run's controller sees it: its optimiser, and the stage budgets lifted
     (:data:`SIM_BUDGET_S`)."""
-    optimiser = {"mpc": "mpc", "oracle": "mpc", "paper-sqp": "paper-sqp", "rule": "rule",
-                 "plant-oracle": "mpc", "mpc-true-weather": "mpc", "mpc-true-state": "mpc",
-                 "mpc-true-params": "mpc"}
-    control = dataclasses.replace(cfg.control, optimiser=optimiser.get(controller, "rule"),
+    # Every controller but these three plans with the mpc optimiser (the oracles and the
+    # split controllers differ only in the information they give it).
+    optimiser = {"paper-sqp": "paper-sqp", "rule": "rule", "fixed": "rule"}
+    control = dataclasses.replace(cfg.control, optimiser=optimiser.get(controller, "mpc"),
                                   time_budget_s=SIM_BUDGET_S)
     daemon = dataclasses.replace(cfg.daemon, calibrate_budget_s=SIM_BUDGET_S,
                                  store_budget_s=SIM_BUDGET_S)
