@@ -115,7 +115,8 @@ def run(args: argparse.Namespace, cfg: PanelConfig, series: WeatherSeries,
     fixed = Command(DEFAULT_FIXED.phi_deg if args.phi_deg is None else args.phi_deg,
                     DEFAULT_FIXED.afr if args.afr is None else args.afr,
                     DEFAULT_FIXED.or_pct if args.or_pct is None else args.or_pct)
-    options = (PlantOptions.lumped_equivalent(sensors="realistic", actuators="realistic")
+    options = (PlantOptions.lumped_equivalent(cfg.model, sensors="realistic",
+                                                actuators="realistic")
                if args.fidelity == "lumped" else None)
     settings = ClosedLoopSettings(
         controller=args.controller, calibration=args.calibration, seed=args.seed, hours=hours,

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dsfd.config.panel import PanelConfig
+from dsfd.config.panel import ModelOptions, PanelConfig
 from dsfd.daemon.runner import RunOptions
 from dsfd.drivers.simulated import SimulatedDriver
 from dsfd.measured import iso_utc
@@ -31,14 +31,15 @@ __all__ = ["DEFAULT_WEATHER", "SimulatedPlant", "cycles_covered", "plant_for_run
 DEFAULT_WEATHER = "rmis-golden-2022-01"
 
 
-def plant_options(fidelity: str) -> PlantOptions:
+def plant_options(fidelity: str, model: ModelOptions | None = None) -> PlantOptions:
     """``full``: the stratified truth plant (docs/model.md#truth-plant); ``lumped``: the same plant
-    with the lumped model's switches (one segment, lumped optics and flows) but realistic sensors
-    and actuators — much faster, for quick dry runs and tests of the daemon itself."""
+    with the lumped model's switches (one segment, lumped optics and flows, those of ``model``
+    when given) but realistic sensors and actuators — much faster, for quick dry runs and
+    tests of the daemon itself."""
     if fidelity == "full":
         return PlantOptions()
     if fidelity == "lumped":
-        return PlantOptions.lumped_equivalent(sensors="realistic", actuators="realistic")
+        return PlantOptions.lumped_equivalent(model, sensors="realistic", actuators="realistic")
     raise ValueError(f"plant fidelity {fidelity!r}: choose full or lumped")
 
 
@@ -143,4 +144,4 @@ def plant_for_run(cfg: PanelConfig, opts: RunOptions) -> SimulatedPlant:
     """The simulated plant ``dsfd run --plant sim`` asks for (weather, start, seed, fidelity)."""
     return simulated_plant(cfg, weather=opts.weather or DEFAULT_WEATHER, start_s=opts.start_s,
                            cycles=opts.cycles, seed=opts.seed,
-                           options=plant_options(opts.plant_fidelity))
+                           options=plant_options(opts.plant_fidelity, cfg.model))

@@ -41,7 +41,7 @@ def _serve(conn: Any, kwargs: dict[str, Any]) -> None:
 
     fidelity = kwargs.pop("fidelity", None)
     if fidelity is not None:
-        kwargs["options"] = plant_options(fidelity)
+        kwargs["options"] = plant_options(fidelity, kwargs["cfg"].model)
     sim = simulated_plant(**kwargs)
     plant = sim.plant
     conn.send(("ready", {"start_s": sim.start_s, "notes": sim.notes,

@@ -22,7 +22,7 @@ from typing import Literal
 import numpy as np
 
 from dsfd.config.loader import setting
-from dsfd.config.panel import PanelConfig
+from dsfd.config.panel import ModelOptions, PanelConfig
 from dsfd.config.parameters import CONVECTIVE_NAMES
 
 SECONDS_PER_DAY = 86400.0
@@ -137,9 +137,14 @@ class PlantOptions:
                              f"choose one of {CONVECTIVE_NAMES}")
 
     @classmethod
-    def lumped_equivalent(cls, **overrides: object) -> PlantOptions:
+    def lumped_equivalent(cls, model: ModelOptions | None = None,
+                          **overrides: object) -> PlantOptions:
         """Every lumped-equivalence switch (docs/model.md#plant-switches) at the lumped model's
         setting (N = 1), others as given.
+
+        ``model``: the panel's model options; the flow switches then follow its
+        ``diagonal_flow`` and ``louver_flow_loss`` (default: the paper's power law for
+        regimes 5–8, with the louver's loss).
 
         One air node is well mixed, so this plant is the lumped model with
         ``model.cavity_air_profile: well_mixed``; with more segments the column stratifies
@@ -153,6 +158,9 @@ class PlantOptions:
             glass_vertical_conduction=False, sensors="ideal", sky_model="lumped",
             advection="upwind",
         )
+        if model is not None:
+            lumped.update(diagonal_flow=model.diagonal_flow,
+                          louver_flow_resistance=model.louver_flow_loss)
         lumped.update(overrides)
         return cls(**lumped)
 

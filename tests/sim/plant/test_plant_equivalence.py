@@ -16,6 +16,7 @@ import dataclasses
 import numpy as np
 import pytest
 
+from dsfd.config.panel import ModelOptions
 from dsfd.physics.forcing import FacadeOptics, facade_forcing, step_inputs
 from dsfd.physics.model import LumpedModel
 from dsfd.sim.openloop import first_step
@@ -49,25 +50,36 @@ def test_lumped_equivalent_options_are_the_e7_settings():
     assert (opt.actuators, opt.sensors, opt.sky_model) == ("ideal", "ideal", "lumped")
     assert opt.louver_flow_resistance and not opt.glass_vertical_conduction
     assert opt.advection == "upwind" and opt.air_properties == "constant"
+    # Given the panel's model options, the flow switches follow them.
+    orifice = ModelOptions(diagonal_flow="orifice", louver_flow_loss=False)
+    opt = PlantOptions.lumped_equivalent(orifice, sensors="realistic")
+    assert (opt.diagonal_flow, opt.louver_flow_resistance, opt.sensors) == (
+        "orifice", False, "realistic")
     full = PlantOptions()
     assert full.n_segments == 10 and full.optics == "fine" and full.actuators == "realistic"
 
 
-@pytest.mark.parametrize("afr", [1, 3, 5, 6, 10])
-def test_plant_matches_lumped_model_over_a_day(suwon, rmis, clear_day, afr):
+@pytest.mark.parametrize(("afr", "diagonal_flow"), [
+    (1, "power_law"), (3, "power_law"), (5, "power_law"), (6, "power_law"), (10, "power_law"),
+    (5, "orifice"), (6, "orifice")])
+def test_plant_matches_lumped_model_over_a_day(suwon, rmis, clear_day, afr, diagonal_flow):
+    # model.diagonal_flow: orifice (docs/model.md#diagonal-flow) is the plant's N = 1 orifice
+    # path too, through the same switch of the lumped-equivalent plant
+    panel = dataclasses.replace(suwon, model=dataclasses.replace(suwon.model,
+                                                                 diagonal_flow=diagonal_flow))
     start, n, inputs = clear_day
-    plant = Plant(suwon, PlantOptions.lumped_equivalent(), seed=4, weather_series=rmis)
-    theta = plant.params.lumped_theta(suwon)  # same θ: h's = m × defaults, f = f_true
+    plant = Plant(panel, PlantOptions.lumped_equivalent(panel.model), seed=4, weather_series=rmis)
+    theta = plant.params.lumped_theta(panel)  # same θ: h's = m × defaults, f = f_true
     # one air node at N = 1 is well mixed: the air leaves at its temperature
     model = LumpedModel(dataclasses.replace(
-        suwon, model=dataclasses.replace(suwon.model, cavity_air_profile="well_mixed")))
+        panel, model=dataclasses.replace(panel.model, cavity_air_profile="well_mixed")))
     x0 = model.steady_state([afr], 1.0, first_step(inputs), theta)
     lumped = model.rollout(x0, np.full((1, n), afr), np.ones((1, n)), inputs, theta)
     plant.reset(start, command=Command(PHI_DEG, afr, 100.0), x0=x0[0])
     x = np.empty((n, 6))
     v = np.empty(n)
     for k in range(n):
-        plant.advance(suwon.model.step_s)
+        plant.advance(panel.model.step_s)
         state = plant.true_state()
         x[k], v[k] = state.x_mid_k, state.v_cav_ms
     diff = (x - lumped.x[0, 1:])[SETTLE_STEPS:]
@@ -95,7 +107,7 @@ def test_plant_matches_lumped_model_over_a_day(suwon, rmis, clear_day, afr):
     # The room-side heat (docs/model.md#room-heat) integrated inside the plant equals the lumped
     # model's step averages summed over the day: Q_sol,trans and Q_DA come from the same
     # optics, Q_cv,rd and Q_air from states that agree as above.
-    dt = suwon.model.step_s
+    dt = panel.model.step_s
     room = plant.room_heat_j()
     for key, lumped_w in (("q_cv_rd", lumped.q_cv_rd_w), ("q_sol_trans", lumped.q_sol_w),
                           ("q_air", lumped.q_air_w), ("q_da", lumped.q_da_w)):
@@ -112,7 +124,8 @@ def test_exponential_profile_follows_the_stratified_column(suwon, rmis, clear_da
     # least twice as closely as the paper's well-mixed node on every state, and (regime 1,
     # room air in and out) so does the heat the air brings into the room.
     start, n, inputs = clear_day
-    plant = Plant(suwon, PlantOptions.lumped_equivalent(n_segments=20, advection="upwind2"),
+    plant = Plant(suwon, PlantOptions.lumped_equivalent(suwon.model, n_segments=20,
+                                                        advection="upwind2"),
                   seed=4, weather_series=rmis)
     theta = plant.params.lumped_theta(suwon)
     runs = {}
