@@ -38,6 +38,7 @@ import numpy as np
 
 from dsfd.config.panel import PanelConfig
 from dsfd.physics.solar import extraterrestrial_irradiance, solar_position
+from dsfd.sim.choices import BENCH_CONTROLLERS
 from dsfd.sim.closed_loop import (
     J_PER_KWH,
     ClosedLoopResult,
@@ -49,8 +50,7 @@ from dsfd.weather import WeatherSeries
 
 __all__ = ["CASES", "CONTROLLERS", "DayClass", "bench_closed_loop", "classify_days", "report"]
 
-CONTROLLERS = ("rule", "mpc", "oracle", "plant-oracle", "mpc-true-weather", "mpc-true-state",
-               "mpc-true-params")
+CONTROLLERS = BENCH_CONTROLLERS
 SKIES = ("clear", "mixed", "overcast")
 SEASONS = ("heating", "cooling")
 CASES = tuple(f"{sky}-{season}" for sky in SKIES for season in SEASONS)

@@ -16,6 +16,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from dsfd.config import ConfigError, load_panel
+from dsfd.sim.choices import BENCH_CONTROLLERS
 
 DEFAULT_PANEL = Path("config/panels/suwon-south.yaml")
 
@@ -164,8 +165,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="closed-loop: one case <clear|mixed|overcast>-<heating|cooling> "
                    "(repeatable; default all six)")
     p.add_argument("--controllers", default=None,
-                   help="closed-loop: comma-separated controllers (default rule, mpc, oracle, "
-                   "plant-oracle, mpc-true-weather, mpc-true-state, mpc-true-params)")
+                   help="closed-loop: comma-separated controllers (default "
+                   f"{', '.join(BENCH_CONTROLLERS)})")
     p.add_argument("--json", type=Path, default=None, help="write the figures as JSON")
     p.set_defaults(handler=run)
 

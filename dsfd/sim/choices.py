@@ -1,12 +1,25 @@
-"""Names of the closed-loop controllers and calibrations (no imports: the CLI lists them
-without loading the simulation, so ``dsfd run`` does not carry the truth plant)."""
+"""Names of the closed-loop controllers and calibrations (nothing but ``typing``: the CLI lists
+them without loading the simulation, so ``dsfd run`` does not carry the truth plant).
+
+Each set of names is one ``Literal`` type, and its tuple is read off the type, so a new
+controller is added in one place.
+"""
 
 from __future__ import annotations
 
-__all__ = ["CALIBRATIONS", "CONTROLLERS", "TRUE_THETA"]
+from typing import Literal, get_args
 
-CONTROLLERS = ("mpc", "paper-sqp", "rule", "fixed", "oracle", "plant-oracle",
-               "mpc-true-weather", "mpc-true-state", "mpc-true-params")
-CALIBRATIONS = ("online", "offline", "none")
+__all__ = ["BENCH_CONTROLLERS", "CALIBRATIONS", "CONTROLLERS", "TRUE_THETA", "CalibrationName",
+           "ControllerName"]
+
+ControllerName = Literal["mpc", "paper-sqp", "rule", "fixed", "oracle", "plant-oracle",
+                         "mpc-true-weather", "mpc-true-state", "mpc-true-params"]
+CalibrationName = Literal["online", "offline", "none"]
+CONTROLLERS: tuple[str, ...] = get_args(ControllerName)
+CALIBRATIONS: tuple[str, ...] = get_args(CalibrationName)
 #: Controllers that plan with the plant's own parameters (no calibration).
 TRUE_THETA = ("oracle", "plant-oracle", "mpc-true-params")
+#: What ``dsfd bench closed-loop`` runs by default, in its table's order: the baseline, the
+#: controller, the two references and the three legs of the split.
+BENCH_CONTROLLERS = ("rule", "mpc", "oracle", "plant-oracle", "mpc-true-weather",
+                     "mpc-true-state", "mpc-true-params")

@@ -48,7 +48,6 @@ from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Literal
 
 import numpy as np
 
@@ -62,7 +61,13 @@ from dsfd.drivers.simulated import SimulatedDriver
 from dsfd.physics.constants import T_ZERO
 from dsfd.physics.model import LumpedModel
 from dsfd.physics.solar import solar_position
-from dsfd.sim.choices import CALIBRATIONS, CONTROLLERS, TRUE_THETA
+from dsfd.sim.choices import (
+    CALIBRATIONS,
+    CONTROLLERS,
+    TRUE_THETA,
+    CalibrationName,
+    ControllerName,
+)
 from dsfd.sim.oracle_controllers import (
     CONTROLLER_CLASSES,
     FrozenCalibration,
@@ -122,10 +127,8 @@ class ClosedLoopSettings:
         What ``plant-oracle`` rolls out.
     """
 
-    controller: Literal["mpc", "paper-sqp", "rule", "fixed", "oracle", "plant-oracle",
-                        "mpc-true-weather", "mpc-true-state",
-                        "mpc-true-params"] = "mpc"
-    calibration: Literal["online", "offline", "none"] = "online"
+    controller: ControllerName = "mpc"
+    calibration: CalibrationName = "online"
     seed: int = 1
     hours: float | None = None
     start_s: float | None = None
