@@ -10,12 +10,12 @@ from __future__ import annotations
 import numpy as np
 
 from dsfd.config.panel import PanelConfig
-from dsfd.control.optimiser import (
+from dsfd.control.horizon import (
     CLOSED,
+    Best,
     ControlProblem,
     Decision,
     HorizonEvaluator,
-    _Best,
     distinct_regimes,
 )
 from dsfd.physics.forcing import FacadeOptics
@@ -37,11 +37,11 @@ def brute_force(cfg: PanelConfig, model: LumpedModel, optics: FacadeOptics,
         r = np.concatenate([r, np.full(len(angles), CLOSED)])
         o = np.concatenate([o, np.zeros(len(angles))])
     ev = HorizonEvaluator(cfg, model, optics, problem, angles)
-    best: _Best | None = None
+    best: Best | None = None
     for start in range(0, a.size, batch):
         sl = slice(start, start + batch)
         terms, labels = ev.evaluate(a[sl], r[sl], o[sl])
-        found = _Best.of(terms, labels, a[sl], r[sl], o[sl])
+        found = Best.of(terms, labels, a[sl], r[sl], o[sl])
         best = found if best is None else best.better(found)
     assert best is not None
     return best.decision(angles, method="brute-force", rollouts=ev.rollouts,

@@ -15,212 +15,32 @@ horizon rollout (:meth:`LumpedModel.rollout`).
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass, field
-from typing import NamedTuple
 
 import numpy as np
 
 from dsfd.config.control import Control
-from dsfd.config.panel import REGIME_OPENINGS, PanelConfig
-from dsfd.control.objective import J_PER_WH, CostTerms, horizon_cost, louver_move_penalty
-from dsfd.estimation.params import with_offsets
-from dsfd.physics.coupling import StepInputs
-from dsfd.physics.forcing import FacadeOptics, Forcing, OpticalLoads, step_inputs
+from dsfd.config.panel import PanelConfig
+from dsfd.control.horizon import (
+    CLOSED,
+    Best,
+    Candidates,
+    ControlProblem,
+    Decision,
+    Evaluated,
+    HorizonEvaluator,
+    coarsen,
+    coarsen_loads,
+    distinct_regimes,
+)
+from dsfd.control.objective import J_PER_WH
+from dsfd.physics.forcing import FacadeOptics
 from dsfd.physics.model import LumpedModel
 from dsfd.physics.regimes import ALL_OPEN
 
-CLOSED = 10
-
-
-@dataclass(frozen=True)
-class ControlProblem:
-    """One decision: where the façade is and what the horizon will bring.
-
-    Attributes
-    ----------
-    x0 : ndarray (6,), [K]
-        Estimated state now (x6 from the observer).
-    forcing : Forcing
-        Façade boundary of the next H steps (forecast).
-    theta : ndarray (9,)
-        Current parameter estimate.
-    heating : bool
-        Heating objective (Eq. 4) or cooling (Eq. 5).
-    previous_phi_deg : float or None, [deg]
-        Louver angle now (for the move penalty and the SQP start).
-    previous_afr : int or None
-    previous_or_pct : float or None, [%]
-    heat_offsets_wm2 : ndarray (4,) or None, [W/m2]
-        Calibrated heat-flux offsets on nodes x1..x4 (the self-calibration's input
-        disturbance, :mod:`dsfd.estimation.params`), added to the absorbed short-wave so
-        that the horizon is predicted by the same model the state estimate comes from.
-    """
-
-    x0: np.ndarray
-    forcing: Forcing
-    theta: np.ndarray
-    heating: bool
-    previous_phi_deg: float | None = None
-    previous_afr: int | None = None
-    previous_or_pct: float | None = None
-    heat_offsets_wm2: np.ndarray | None = None
-
-    def step_inputs(self, loads: OpticalLoads) -> StepInputs:
-        """Model inputs of the horizon for louver loads ``loads``, offsets included."""
-        inp = step_inputs(self.forcing, loads)
-        if self.heat_offsets_wm2 is None:
-            return inp
-        return with_offsets(inp, self.heat_offsets_wm2)
-
-
-@dataclass(frozen=True)
-class Decision:
-    """A control decision with its predicted cost and a trace of how it was reached."""
-
-    phi_deg: float
-    afr: int
-    or_pct: float
-    method: str
-    cost_j: float
-    terms_j: dict[str, float] = field(default_factory=dict)
-    rollouts: int = 0
-    trace: tuple[str, ...] = ()
-
-
-def distinct_regimes(available: tuple[int, ...]) -> tuple[int, ...]:
-    """One representative regime per damper set the panel has (1, 3, 5, 6, 9, 10)."""
-    seen: dict[frozenset[str], int] = {}
-    for regime in sorted(available):
-        seen.setdefault(REGIME_OPENINGS[regime], regime)
-    return tuple(sorted(seen.values()))
-
-
-class Candidates(NamedTuple):
-    """Constant controls over the horizon, one candidate per element (arrays of one length).
-
-    Attributes
-    ----------
-    angle_idx : ndarray of int
-        Louver position, an index into the optimiser's angles.
-    regime : ndarray of int
-        Airflow regime (the representative of its damper set).
-    or_ : ndarray of float, [-]
-        Damper opening ratio 0..1.
-    """
-
-    angle_idx: np.ndarray
-    regime: np.ndarray
-    or_: np.ndarray
-
-    @classmethod
-    def empty(cls) -> Candidates:
-        return cls(np.zeros(0, int), np.zeros(0, int), np.zeros(0))
-
-    @property
-    def size(self) -> int:
-        return int(np.asarray(self.angle_idx).size)
-
-    def take(self, idx: np.ndarray) -> Candidates:
-        return Candidates(*(np.asarray(v)[idx] for v in self))
-
-    def join(self, *more: Candidates) -> Candidates:
-        """These candidates followed by ``more``."""
-        return Candidates(*(np.concatenate(v) for v in zip(self, *more, strict=True)))
-
-    def distinct(self) -> Candidates:
-        """Without repeats, in first-seen order."""
-        _, first = np.unique(np.stack(list(self)), axis=1, return_index=True)
-        return self.take(np.sort(first))
-
-
-@dataclass(frozen=True, eq=False)
-class Evaluated:
-    """Candidates rolled out over the horizon: their cost terms and first-step regime labels."""
-
-    candidates: Candidates
-    terms: CostTerms
-    labels: np.ndarray
-
-    def best(self) -> _Best:
-        """The cheapest (the first of equal costs)."""
-        return _Best.of(self.terms, self.labels, *self.candidates)
-
-    def join(self, other: Evaluated) -> Evaluated:
-        return Evaluated(self.candidates.join(other.candidates),
-                         CostTerms(*(np.concatenate(v) for v in zip(self.terms, other.terms,
-                                                                   strict=True))),
-                         np.concatenate([self.labels, other.labels]))
-
-
-class HorizonEvaluator:
-    """Batched horizon cost of constant controls for one decision."""
-
-    def __init__(self, cfg: PanelConfig, model: LumpedModel, optics: FacadeOptics,
-                 problem: ControlProblem, angles_deg: np.ndarray, *,
-                 coupling_tol_k: float | None = None,
-                 loads: OpticalLoads | None = None) -> None:
-        self.cfg = cfg
-        self.model = model
-        self.coupling_tol_k = coupling_tol_k
-        self.problem = problem
-        self.angles_deg = np.asarray(angles_deg, float)
-        self.loads = (optics.loads(problem.forcing, np.radians(self.angles_deg))
-                      if loads is None else loads)
-        self.rollouts = 0
-        step = cfg.louver.step_deg if cfg.louver is not None else 18.0
-        self._penalty = louver_move_penalty(
-            self.angles_deg, problem.previous_phi_deg,
-            penalty_wh=cfg.control.louver_move_penalty_wh, step_deg=step)
-
-    def inputs(self, angle_idx: np.ndarray) -> StepInputs:
-        """Model inputs of candidates with louver positions ``angle_idx`` → (C, H, ...)."""
-        ld = self.loads
-        picked = type(ld)(*(np.asarray(v)[angle_idx] for v in ld))
-        return self.problem.step_inputs(picked)
-
-    def evaluate(self, angle_idx: np.ndarray, regime: np.ndarray,
-                 or_: np.ndarray) -> tuple[CostTerms, np.ndarray]:
-        """Cost of each candidate [J] (incl. move penalty) and its first-step regime label."""
-        angle_idx = np.asarray(angle_idx, int)
-        n = angle_idx.size
-        h = self.problem.forcing.time_s.shape[0]
-        traj = self.model.rollout(
-            self.problem.x0, np.broadcast_to(np.asarray(regime, int)[:, None], (n, h)),
-            np.broadcast_to(np.asarray(or_, float)[:, None], (n, h)), self.inputs(angle_idx),
-            self.problem.theta, coupling_tol_k=self.coupling_tol_k)
-        self.rollouts += n
-        terms = horizon_cost(traj, dt=self.model.dt, heating=self.problem.heating)
-        terms = terms._replace(cost_j=terms.cost_j + self._penalty[angle_idx])
-        return terms, traj.label[:, 0]
-
-    def evaluate_all(self, candidates: Candidates) -> Evaluated:
-        """:meth:`evaluate` of a candidate record, kept together with it."""
-        terms, labels = self.evaluate(*candidates)
-        return Evaluated(candidates, terms, labels)
-
-
-def _block_means(v: np.ndarray, factor: int, axis: int) -> np.ndarray:
-    n = v.shape[axis]
-    starts = np.arange(0, n, factor)
-    counts = np.diff(np.append(starts, n)).reshape((-1,) + (1,) * (v.ndim - axis - 1))
-    return np.add.reduceat(np.asarray(v, float), starts, axis=axis) / counts
-
-
-def coarsen(forcing: Forcing, factor: int) -> Forcing:
-    """Block means of a horizon's boundary over ``factor`` consecutive steps.
-
-    A screening pass steps the model with ``factor`` times the step length over these
-    means (the exact ZOH is exact for any step; only the weather and the linearisation
-    are held longer).
-    """
-    return Forcing(*(_block_means(v, factor, 0) for v in forcing))
-
-
-def coarsen_loads(loads: OpticalLoads, factor: int) -> OpticalLoads:
-    """Block means of the optical loads (m angles, n steps, ...) over ``factor`` steps: the
-    screening's loads are the step averages of the full-resolution ones (no second pass
-    through the optics)."""
-    return OpticalLoads(*(_block_means(v, factor, 1) for v in loads))
+# ControlProblem, Decision and the rollout's pieces live in dsfd.control.horizon; they are
+# re-exported here, where the daemon and the public API have always found them.
+__all__ = ["CLOSED", "ControlProblem", "Decision", "HorizonEvaluator", "MpcOptimiser",
+           "distinct_regimes", "optimise"]
 
 
 class MpcOptimiser:
@@ -334,7 +154,7 @@ class MpcOptimiser:
         return brackets.join(neighbours)
 
     def _refine(self, full: HorizonEvaluator, evaluated: Evaluated,
-                best: _Best) -> tuple[_Best, int]:
+                best: Best) -> tuple[Best, int]:
         """Stage 3: the louver positions next to the best (the screening can misrank
         neighbouring angles by a tenth of a per cent) and parabolic refinement of the best
         pair's OR, one batch per round. Returns the best and the number of batches."""
@@ -368,7 +188,7 @@ def _around(idx: int, n_angles: int, reach: int) -> np.ndarray:
     return out[(out >= 0) & (out < n_angles) & (out != idx)]
 
 
-def _louver_neighbours(best: _Best, n_angles: int, reach: int,
+def _louver_neighbours(best: Best, n_angles: int, reach: int,
                        evaluated: Candidates) -> Candidates:
     """Louver positions within ``reach`` steps of the best, at its regime and OR, that have
     not been evaluated at full resolution yet."""
@@ -423,34 +243,3 @@ def optimise(cfg: PanelConfig, model: LumpedModel, optics: FacadeOptics,
              problem: ControlProblem) -> Decision:
     """One MPC decision (convenience wrapper of :class:`MpcOptimiser`)."""
     return MpcOptimiser(cfg, model, optics).decide(problem)
-
-
-@dataclass(frozen=True)
-class _Best:
-    cost: float
-    angle_idx: int
-    regime: int
-    or_: float
-    label: int
-    terms: dict[str, float]
-
-    @classmethod
-    def of(cls, terms: CostTerms, labels: np.ndarray, a: np.ndarray, r: np.ndarray,
-           o: np.ndarray) -> _Best:
-        i = int(np.argmin(terms.cost_j))
-        return cls(float(terms.cost_j[i]), int(a[i]), int(r[i]), float(o[i]), int(labels[i]),
-                   {name: float(getattr(terms, name)[i]) for name in terms._fields})
-
-    def better(self, other: _Best) -> _Best:
-        return other if other.cost < self.cost else self
-
-    def describe(self, angles: np.ndarray) -> str:
-        return (f"louver {angles[self.angle_idx]:+.0f} deg, regime {self.label}, OR "
-                f"{self.or_ * 100:.1f} %, J {self.cost / 3600.0:+.2f} Wh")
-
-    def decision(self, angles: np.ndarray, *, method: str, rollouts: int,
-                 trace: tuple[str, ...]) -> Decision:
-        or_pct = 0.0 if self.regime == CLOSED else round(self.or_ * 100.0, 1)
-        return Decision(phi_deg=float(angles[self.angle_idx]), afr=self.label, or_pct=or_pct,
-                        method=method, cost_j=self.cost, terms_j=self.terms, rollouts=rollouts,
-                        trace=trace)
