@@ -25,6 +25,7 @@ from dsfd.physics.model import LumpedModel
 __all__ = ["CLOSED", "Best", "Candidates", "ControlProblem", "Decision", "Evaluated",
            "HorizonEvaluator", "coarsen", "coarsen_loads", "distinct_regimes"]
 
+#: Regime 10: every damper closed (no opening ratio to search).
 CLOSED = 10
 
 
