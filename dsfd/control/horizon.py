@@ -222,6 +222,9 @@ def coarsen_loads(loads: OpticalLoads, factor: int) -> OpticalLoads:
 
 @dataclass(frozen=True)
 class Best:
+    """The cheapest candidate of a batch: its cost [J], controls, first-step label and
+    cost terms [J] (what a :class:`Decision` is made of)."""
+
     cost: float
     angle_idx: int
     regime: int

@@ -142,25 +142,24 @@ class PlantOptions:
         """Every lumped-equivalence switch (docs/model.md#plant-switches) at the lumped model's
         setting (N = 1), others as given.
 
-        ``model``: the panel's model options; the flow switches then follow its
-        ``diagonal_flow`` and ``louver_flow_loss`` (default: the paper's power law for
-        regimes 5–8, with the louver's loss).
+        ``model``: the panel's model options, whose ``diagonal_flow`` and ``louver_flow_loss``
+        the flow switches follow (default: the model's defaults, the paper's power law for
+        regimes 5–8 with the louver's loss).
 
         One air node is well mixed, so this plant is the lumped model with
         ``model.cavity_air_profile: well_mixed``; with more segments the column stratifies
         and the default exponential profile follows it more closely.
         """
+        model = ModelOptions() if model is None else model
         lumped = dict(
             n_segments=1, split_cavity=False, plenums=False, damper_model="orifice",
-            louver_flow_resistance=True, diagonal_flow="power_law", convection="constant",
-            dgu_gap="constant_h", radiation="three_layer", optics="lumped", solar_time="step",
+            louver_flow_resistance=model.louver_flow_loss, diagonal_flow=model.diagonal_flow,
+            convection="constant", dgu_gap="constant_h", radiation="three_layer",
+            optics="lumped", solar_time="step",
             weather_hold="zoh", air_properties="constant", actuators="ideal",
             glass_vertical_conduction=False, sensors="ideal", sky_model="lumped",
             advection="upwind",
         )
-        if model is not None:
-            lumped.update(diagonal_flow=model.diagonal_flow,
-                          louver_flow_resistance=model.louver_flow_loss)
         lumped.update(overrides)
         return cls(**lumped)
 
