@@ -289,6 +289,11 @@ class ModelOptions:
     q_air_basis: Literal["ventilation_credit", "make_up_loss"] = setting(
         "ventilation_credit", doc="Accounting of Q_air (docs/model.md#q-air)"
     )
+    decomposition: Literal["erbs", "disc"] = setting(
+        "erbs", doc="Split of a measured GHI into beam and diffuse where DNI and DHI are not "
+        "measured: Erbs (the paper's era, kt alone) or Maxwell's DISC (kt and the "
+        "pressure-corrected air mass) (docs/model.md#decomposition)"
+    )
     transposition: Literal["haydavies", "isotropic"] = setting(
         "haydavies", doc="Sky-diffuse transposition onto the façade (docs/model.md#transposition)"
     )

@@ -43,7 +43,13 @@ from dsfd.physics.optics import (
     glass_triples,
     layer_absorption,
 )
-from dsfd.physics.solar import erbs, extraterrestrial_irradiance, facade_irradiance, solar_position
+from dsfd.physics.solar import (
+    disc,
+    erbs,
+    extraterrestrial_irradiance,
+    facade_irradiance,
+    solar_position,
+)
 
 #: Wind-profile exponent a and boundary-layer thickness δ [m] by terrain (EnergyPlus
 #: Engineering Reference, "Local Wind Speed Calculations"); the met station is "flat".
@@ -94,6 +100,21 @@ def local_wind_speed(u_met: np.ndarray, *, terrain: str, height_m: float) -> np.
     return np.asarray(u_met, float) * (d_met / MET_HEIGHT_M) ** a_met * (height_m / d) ** a
 
 
+def _decompose(method: str, ghi: np.ndarray, zenith_deg: np.ndarray, dni_extra: np.ndarray,
+               w: WeatherInputs) -> tuple[np.ndarray, np.ndarray]:
+    """DNI and DHI [W/m2] from GHI by ``model.decomposition`` (docs/model.md#decomposition);
+    both keep GHI = DHI + DNI cos Z."""
+    if method == "erbs":
+        split = erbs(ghi, zenith_deg, dni_extra)
+        return split.dni, split.dhi
+    cos_z = np.cos(np.radians(zenith_deg))
+    up = cos_z > 0.0
+    dni = disc(ghi, zenith_deg, w.time_s, pressure_pa=w.pressure_pa).dni
+    # (DISC knows no GHI bound: near kt = 1 its beam alone can exceed the global)
+    dni = np.where(up, np.minimum(dni, ghi / np.where(up, cos_z, 1.0)), 0.0)
+    return dni, ghi - dni * np.where(up, cos_z, 0.0)
+
+
 def facade_forcing(cfg: PanelConfig, w: WeatherInputs, *,
                    transposition: str | None = None) -> Forcing:
     """Façade boundary conditions of every step (docs/model.md#solar, docs/model.md#sky,
@@ -113,9 +134,9 @@ def facade_forcing(cfg: PanelConfig, w: WeatherInputs, *,
     ghi = np.clip(np.asarray(w.ghi_wm2, float), 0.0, None)
     if poa is not None:  # façade-plane data only: GHI may be absent
         ghi = np.where(np.isfinite(ghi), ghi, 0.0)
-    split = erbs(ghi, sun.zenith_deg, dni_extra)
-    dni = np.where(np.isfinite(w.dni_wm2), w.dni_wm2, split.dni)
-    dhi = np.where(np.isfinite(w.dhi_wm2), w.dhi_wm2, split.dhi)
+    split_dni, split_dhi = _decompose(cfg.model.decomposition, ghi, sun.zenith_deg, dni_extra, w)
+    dni = np.where(np.isfinite(w.dni_wm2), w.dni_wm2, split_dni)
+    dhi = np.where(np.isfinite(w.dhi_wm2), w.dhi_wm2, split_dhi)
     below = sun.zenith_deg >= 90.0  # no beam from a sun below the horizon
     dni = np.where(below, 0.0, np.clip(dni, 0.0, None))
     dhi = np.clip(dhi, 0.0, None)
