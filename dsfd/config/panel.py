@@ -17,6 +17,7 @@ from dsfd.config.control import Control
 from dsfd.config.daemon import DaemonSettings
 from dsfd.config.devices import Devices
 from dsfd.config.loader import Problem, setting
+from dsfd.config.model import ModelOptions
 from dsfd.config.mqtt import Mqtt, topic_problem
 from dsfd.config.parameters import PARAMETER_NAMES
 from dsfd.config.safety import Safety
@@ -265,65 +266,6 @@ class Daylight:
 
 
 @dataclass(frozen=True, kw_only=True)
-class ModelOptions:
-    step_s: float = setting(60.0, doc="Model time step T", unit="s", gt=0, le=3600)
-    coupling: Literal["implicit", "ping_pong"] = setting(
-        "implicit", doc="Thermal–airflow coupling per step (docs/model.md#coupling)"
-    )
-    ping_pong_substeps: int = setting(
-        1, doc="Sub-steps per step in ping-pong coupling (≤ 10 s each is stable)", ge=1, le=60
-    )
-    coupling_tolerance_k: float = setting(
-        1e-6, doc="Fixed-point tolerance on the end-of-step cavity temperature", unit="K",
-        gt=0, le=0.1,
-    )
-    coupling_max_iterations: int = setting(40, doc="Fixed-point evaluation limit", ge=2, le=200)
-    zoh: Literal["eig", "expm"] = setting(
-        "eig",
-        doc="Exact ZOH via the symmetric eigen-decomposition (fast) or the augmented "
-        "matrix exponential (Van Loan reference)",
-    )
-    sky_model: Literal["swinbank", "clark_allen"] = setting(
-        "swinbank", doc="Sky temperature model (docs/model.md#sky)"
-    )
-    q_air_basis: Literal["ventilation_credit", "make_up_loss"] = setting(
-        "ventilation_credit", doc="Accounting of Q_air (docs/model.md#q-air)"
-    )
-    decomposition: Literal["erbs", "disc"] = setting(
-        "erbs", doc="Split of a measured GHI into beam and diffuse where DNI and DHI are not "
-        "measured: Erbs (the paper's era, kt alone) or Maxwell's DISC (kt and the "
-        "pressure-corrected air mass) (docs/model.md#decomposition)"
-    )
-    transposition: Literal["haydavies", "isotropic"] = setting(
-        "haydavies", doc="Sky-diffuse transposition onto the façade (docs/model.md#transposition)"
-    )
-    louver_flow_loss: bool = setting(
-        True, doc="The slats' flow loss K_L(φ) (Borda–Carnot per slat row, "
-        "docs/model.md#louver-flow-loss) adds to the form loss f of the orifice regimes and is in "
-        "series with the power law of regimes 5-8, so the louver angle also changes the airflow; "
-        "false: the paper's model, where f, c and n alone stand for the cavity's losses")
-    cavity_air_profile: Literal["well_mixed", "exponential"] = setting(
-        "exponential", doc="What the cavity-air state x5 stands for: 'exponential' (ISO 15099 "
-        "ventilated gap: the mean of an air column warming exponentially from its inlet, "
-        "which is what a mid-height probe reads and what sets the stack; the air leaves at "
-        "T_in + k (x5 − T_in), 1 < k ≤ 2) or 'well_mixed' (the paper's model: the air leaves "
-        "at x5)")
-    diagonal_flow: Literal["power_law", "orifice"] = setting(
-        "power_law", doc="Flow law of the diagonal regimes 5-8 (docs/model.md#diagonal-flow): "
-        "'power_law' (the paper's Q = c OR |Δp|^n, with c and n calibrated only while a "
-        "diagonal regime runs) or 'orifice' (the two dampers and the cavity's form loss f in "
-        "series, as regimes 1-4: c and n are not used, and every regime but 10 informs f)")
-    louver_diffuse: Literal["sky_ground", "uniform"] = setting(
-        "sky_ground", doc="How the outdoor diffuse light that the exterior pane transmits meets "
-        "the louver: 'sky_ground' (its sky and ground parts with the slats' own properties for "
-        "each, docs/model.md#louver-diffuse: slats tilted up see the bright sky, tilted down "
-        "the dim ground) or 'uniform' (the paper's model: one hemispherical average)")
-    air_density_kgm3: float = setting(1.19, doc="Air density for heat capacities", unit="kg/m3",
-                                      gt=0)
-    air_heat_capacity_jkgk: float = setting(1006.0, doc="c_p of air", unit="J/(kg K)", gt=0)
-
-
-@dataclass(frozen=True, kw_only=True)
 class Bounded:
     """A calibrated parameter: default (prior) and bounds."""
 
@@ -378,7 +320,8 @@ class PanelConfig:
     openings: Openings = setting(doc="Dampers and airflow boundary")
     room: Room = setting(default_factory=Room, doc="Room-side boundary")
     daylight: Daylight = setting(default_factory=Daylight, doc="Daylighting proxy")
-    model: ModelOptions = setting(default_factory=ModelOptions, doc="Lumped-model options")
+    model: ModelOptions = setting(default_factory=ModelOptions, doc="Lumped-model options "
+                                  "(dsfd.config.model)")
     parameters: Parameters = setting(doc="Calibrated parameters: defaults and bounds")
     calibration: Calibration = setting(
         default_factory=Calibration, doc="On-line self-calibration and off-line fit settings "

@@ -15,7 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dsfd.config.panel import ModelOptions, PanelConfig
+from dsfd.config.model import ModelOptions
+from dsfd.config.panel import PanelConfig
 from dsfd.daemon.runner import RunOptions
 from dsfd.drivers.simulated import SimulatedDriver
 from dsfd.measured import iso_utc

@@ -22,7 +22,8 @@ from typing import Literal
 import numpy as np
 
 from dsfd.config.loader import setting
-from dsfd.config.panel import ModelOptions, PanelConfig
+from dsfd.config.model import ModelOptions
+from dsfd.config.panel import PanelConfig
 from dsfd.config.parameters import CONVECTIVE_NAMES
 
 SECONDS_PER_DAY = 86400.0

@@ -16,7 +16,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from dsfd.config.panel import ModelOptions
+from dsfd.config.model import ModelOptions
 from dsfd.physics.forcing import FacadeOptics, facade_forcing, step_inputs
 from dsfd.physics.model import LumpedModel
 from dsfd.sim.openloop import first_step
