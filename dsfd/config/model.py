@@ -41,8 +41,9 @@ class ModelOptions:
     )
     decomposition: Literal["erbs", "disc"] = setting(
         "erbs", doc="Split of a measured GHI into beam and diffuse where DNI and DHI are not "
-        "measured: Erbs (the paper's era, kt alone) or Maxwell's DISC (kt and the "
-        "pressure-corrected air mass) (docs/model.md#decomposition)"
+        "measured: Erbs (kt alone) or Maxwell's DISC (kt and the pressure-corrected air "
+        "mass: closer to the measured beam on the bundled records, but the closed loop did "
+        "worse with it on mixed days; docs/model.md#decomposition)"
     )
     transposition: Literal["haydavies", "isotropic"] = setting(
         "haydavies", doc="Sky-diffuse transposition onto the façade (docs/model.md#transposition)"
