@@ -10,6 +10,7 @@ import pytest
 
 from dsfd.physics.forcing import facade_forcing
 from dsfd.sim.replay import at_site, load_weather, series_inputs
+from dsfd.weather.series import CHANNELS
 
 #: Two bundled records that measure DNI and DHI besides GHI (both high, dry sites).
 RECORDS = ("rmis-golden-2022-01", "surfrad-alamosa-2016-01-01")
@@ -22,9 +23,7 @@ def _with(cfg, method):
 def _record(cfg, name):
     """The record's weather at the panel's site: as measured, and with GHI alone."""
     s = at_site(load_weather(name), cfg)
-    channels = {n: getattr(s, n) for n in ("t_out_c", "ghi_wm2", "dni_wm2", "dhi_wm2",
-                                           "wind_speed_ms", "wind_dir_deg", "pressure_pa",
-                                           "rh_pct")}
+    channels = {name: getattr(s, name) for name in CHANNELS}
     measured = series_inputs(s.time_s, channels, room=cfg.room, facade=cfg.facade)
     nan = np.full(s.time_s.shape, np.nan)
     ghi_only = measured._replace(dni_wm2=nan, dhi_wm2=nan)
