@@ -19,6 +19,7 @@ come from :mod:`dsfd.sim.plant.convection`, the Jacobian from
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -265,6 +266,12 @@ class PlantModel:
                "args": (t, T, p, t_out, t_in, wind, cp_b, cp_t, k_l)}
         fp = ctx.flow
         if fp.mode == 0:
+            return out
+        if not (t_bot > 0.0 and t_top > 0.0):
+            # Radau's Newton iteration can try a state far from the solution (-300 K seen):
+            # such air has no density and no flows; NaN makes the solver reject the iterate
+            # and shorten the step (scipy's collocation solve stops at non-finite values).
+            out["m"] = [math.nan] * 4
             return out
         k = ctx.k_static if ctx.k_static is not None else self.resistances(ctx, t, k_l)
         rho_b = [rho_o, rho_o, rho_i, rho_i]

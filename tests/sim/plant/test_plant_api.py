@@ -118,6 +118,22 @@ def test_drift_and_options(suwon, rmis):
         PlantOptions(drift_h_name="h_x")
 
 
+def test_an_unphysical_trial_state_is_rejected_not_raised(suwon, rmis):
+    """Radau's Newton iteration tried cavity air at −300 K in a dry run (all dampers open):
+    the one-node flow solver then took the square root of a negative density and the plant
+    failed. The right-hand side answers such a state with NaN, which makes the solver reject
+    the iterate and shorten the step."""
+    plant = Plant(suwon, PlantOptions(n_segments=3), seed=1, weather_series=rmis)
+    plant.reset(day_start(rmis, 1) + 11 * HOUR, command=Command(0.0, 9, 100.0))
+    plant.advance(60.0)
+    model = plant.model
+    y = plant._y.copy()
+    y[:model.nn] = -300.0
+    assert np.isnan(model.rhs(plant.time_s, y)).any()
+    plant.advance(60.0)  # and the plant goes on from its real state
+    assert np.isfinite(plant.true_state().x_mid_k).all()
+
+
 def test_panel_without_louver_runs(suwon, rmis):
     import dataclasses
 
