@@ -97,7 +97,8 @@ def measured_weather(cfg: PanelConfig, sample: Sample) -> CycleWeather:
         t_out_c=sample.good("t_out_c"), ghi_wm2=sample.good("ghi_wm2"),
         wind_speed_ms=wind, wind_dir_deg=wind_dir,
         pressure_pa=None if pressure_hpa is None else pressure_hpa * 100.0,
-        t_in_c=t_room_c, room=cfg.room, facade_azimuth_deg=cfg.facade.azimuth_deg)
+        t_in_c=t_room_c, room=cfg.room, facade_azimuth_deg=cfg.facade.azimuth_deg,
+        elevation_m=cfg.site.elevation_m)
     return CycleWeather(w, facade_forcing(cfg, w), (), tuple(notes), t_room_c, room_source)
 
 

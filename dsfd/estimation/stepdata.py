@@ -130,9 +130,10 @@ def _controls(cfg: PanelConfig, data: MeasuredData, notes: list[str]):
 
 
 def weather_of_steps(data: MeasuredData, *, room: Room, facade: Facade,
-                     notes: list[str] | None = None) -> WeatherInputs:
+                     notes: list[str] | None = None, elevation_m: float = 0.0) -> WeatherInputs:
     """Weather of each step (from the row that ends it) at the step midpoints, SI units,
-    for a panel with these ``room`` and ``facade`` sections (what was not measured)."""
+    for a panel with these ``room`` and ``facade`` sections and a site at ``elevation_m``
+    [m] (what was not measured)."""
     notes = [] if notes is None else notes
     src = data.source or "measured data"
     t_rows = data.time_s
@@ -173,7 +174,7 @@ def weather_of_steps(data: MeasuredData, *, room: Room, facade: Facade,
         rh_pct=optional("rh_pct", fill=False), t_in_c=t_in_c,
         poa_global_wm2=filled("poa_wm2") if poa_ok else None,
         poa_diffuse_wm2=filled("poa_diffuse_wm2") if poa_ok else None,
-        room=room, facade_azimuth_deg=facade.azimuth_deg)
+        room=room, facade_azimuth_deg=facade.azimuth_deg, elevation_m=elevation_m)
 
 
 def step_data(cfg: PanelConfig, data: MeasuredData) -> StepData:
@@ -194,7 +195,8 @@ def step_data(cfg: PanelConfig, data: MeasuredData) -> StepData:
     notes: list[str] = []
     step_s = data.step_s
     regime, phi, or_ = _controls(cfg, data, notes)
-    weather = weather_of_steps(data, room=cfg.room, facade=cfg.facade, notes=notes)
+    weather = weather_of_steps(data, room=cfg.room, facade=cfg.facade, notes=notes,
+                               elevation_m=cfg.site.elevation_m)
     forcing = facade_forcing(cfg, weather)
     column = Forcing(*(np.asarray(v)[:, None] for v in forcing))
     loads = FacadeOptics(cfg).loads(column, phi[:-1])

@@ -10,7 +10,8 @@ not measured           taken as
 =====================  ==================================================================
 wind speed             calm, 0 m/s
 wind direction         normal to the façade (the façade azimuth)
-station pressure       the standard atmosphere, :data:`STANDARD_PRESSURE_PA`
+station pressure       the standard atmosphere at the site's elevation
+                       (:func:`standard_pressure_pa`; sea level when not given)
 DNI, DHI               NaN: :func:`~dsfd.physics.forcing.facade_forcing` splits GHI (Erbs)
 relative humidity      dew point NaN; the Clark–Allen sky then takes
                        t_out − :data:`DEW_POINT_DEPRESSION_K` (:func:`sky_dew_point_k`)
@@ -32,7 +33,7 @@ from dsfd.config.panel import Room
 from dsfd.physics.constants import STANDARD_PRESSURE_PA, T_ZERO
 
 __all__ = ["DEW_POINT_DEPRESSION_K", "STANDARD_PRESSURE_PA", "WeatherInputs", "dew_point_k",
-           "model_weather", "sky_dew_point_k"]
+           "model_weather", "sky_dew_point_k", "standard_pressure_pa"]
 
 #: Dew-point depression assumed by the Clark–Allen sky when no humidity is measured [K].
 DEW_POINT_DEPRESSION_K = 5.0
@@ -114,8 +115,21 @@ def _or_default(a: np.ndarray, default: float) -> np.ndarray:
     return np.where(np.isfinite(a), a, default)
 
 
+def standard_pressure_pa(elevation_m: float) -> float:
+    """Pressure of the standard atmosphere at ``elevation_m`` [m] above sea level [Pa].
+
+    Notes
+    -----
+    The troposphere of the ICAO/ISO standard atmosphere: p = p0 (1 − 2.25577·10⁻⁵ z)^5.25588
+    with p0 = 101 325 Pa (ISO 2533:1975; the same form in the ASHRAE Handbook —
+    Fundamentals, ch. 1, eq. 3). It is what a panel without a barometer is modelled at: at
+    Golden CO (1829 m) 812 hPa, where sea level would make the air 25 % too dense.
+    """
+    return STANDARD_PRESSURE_PA * (1.0 - 2.25577e-5 * elevation_m) ** 5.25588
+
+
 def model_weather(*, time_s: ArrayLike, t_out_c: ArrayLike, ghi_wm2: ArrayLike | None,
-                  room: Room, facade_azimuth_deg: float,
+                  room: Room, facade_azimuth_deg: float, elevation_m: float = 0.0,
                   dni_wm2: ArrayLike | None = None, dhi_wm2: ArrayLike | None = None,
                   wind_speed_ms: ArrayLike | None = None, wind_dir_deg: ArrayLike | None = None,
                   pressure_pa: ArrayLike | None = None, rh_pct: ArrayLike | None = None,
@@ -136,6 +150,9 @@ def model_weather(*, time_s: ArrayLike, t_out_c: ArrayLike, ghi_wm2: ArrayLike |
         The panel's room section (room air when not measured, mean radiant temperature).
     facade_azimuth_deg : float, [deg]
         The façade's outward normal, the wind direction when none is measured.
+    elevation_m : float, [m]
+        The site's elevation: the standard atmosphere there is the pressure when none is
+        measured (:func:`standard_pressure_pa`).
     wind_speed_ms, wind_dir_deg : array (n,) or float, optional
         At the met mast [m/s]; the direction the wind comes from [deg from north].
     pressure_pa : array (n,) or float, [Pa], optional
@@ -174,7 +191,7 @@ def model_weather(*, time_s: ArrayLike, t_out_c: ArrayLike, ghi_wm2: ArrayLike |
         dhi_wm2=dhi,
         wind_speed_ms=_or_default(wind, 0.0),
         wind_dir_deg=_or_default(_channel(wind_dir_deg, n), facade_azimuth_deg),
-        pressure_pa=_or_default(_channel(pressure_pa, n), STANDARD_PRESSURE_PA),
+        pressure_pa=_or_default(_channel(pressure_pa, n), standard_pressure_pa(elevation_m)),
         t_in_k=t_in_k,
         t_mrt_k=t_mrt_k,
         t_dew_k=np.full(n, np.nan) if rh_pct is None else dew_point_k(t_out_c, rh_pct),

@@ -20,7 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from dsfd.config.panel import PanelConfig
-from dsfd.physics.constants import R_AIR, STANDARD_PRESSURE_PA
+from dsfd.physics.boundary import standard_pressure_pa
+from dsfd.physics.constants import R_AIR
 from dsfd.sim.plant.config import PlantOptions
 from dsfd.sim.plant.flow import IS_TOP
 
@@ -175,7 +176,7 @@ def capacities(cfg: PanelConfig, lay: Layout,
     rho_cp = mo.air_density_kgm3 * mo.air_heat_capacity_jkgk
     air = vol > 0
     cap[air] = rho_cp * vol[air]
-    p_ref = STANDARD_PRESSURE_PA * (1.0 - 2.25577e-5 * cfg.site.elevation_m) ** 5.25588
+    p_ref = standard_pressure_pa(cfg.site.elevation_m)
     return cap, vol, p_ref
 
 
