@@ -1,10 +1,8 @@
 """The station's barometer reaches the model: the air density of every step follows it.
 
-Without a barometer the daemon models the standard atmosphere at the site's elevation. A
-sea-level default on the bundled RMIS record (Golden CO, 1.8 km, 823 hPa) made the air 23 %
-too dense, and the dry run's self-calibration absorbed that into h_ca3 and a +85 W/m²
-heat-flux offset on x2 (session note of 2026-11-27); the simulated station therefore reports
-the pressure its plant's air has.
+Without a barometer the daemon models the standard atmosphere at the site's elevation
+(docs/model.md#inputs). A sea-level default on a record from Golden CO (1.8 km, 823 hPa)
+makes the air 23 % too dense, which the self-calibration absorbs into wrong parameters.
 """
 
 from __future__ import annotations

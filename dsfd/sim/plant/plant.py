@@ -290,21 +290,18 @@ class Plant:
     def station_weather(self) -> dict[str, float]:
         """True station values: means over the interval that ends now (logger convention).
 
-        GHI is that of the plant's sky (:func:`~dsfd.sim.plant_forcing.station_ghi`). The
-        pressure is the one the plant's air has (the record's station pressure): a daemon
-        that assumed sea level instead models air 23 % too dense on a record from 1.8 km.
+        GHI is that of the plant's sky (:func:`~dsfd.sim.plant_forcing.station_ghi`).
         """
         t = self.time_s - 0.5 * min(self._last_len, float(self.cfg.model.step_s))
         w = weather_at(self.series, self.cfg, np.array([t]), self.room_c(np.array([t])))
         return {"t_out_c": float(w.t_out_k[0] - T_ZERO),
                 "ghi_wm2": float(station_ghi(self.cfg.site, w)[0]),
                 "wind_speed_ms": float(w.wind_speed_ms[0]),
-                "wind_dir_deg": float(w.wind_dir_deg[0]),
-                "pressure_hpa": float(w.pressure_pa[0]) / 100.0}
+                "wind_dir_deg": float(w.wind_dir_deg[0])}
 
     def read_sensors(self) -> dict[str, float]:
         """Sensor readings now: ``x1_c..x5_c, t_room_c, v_cav_ms, t_out_c, ghi_wm2,
-        wind_speed_ms, wind_dir_deg, pressure_hpa`` (NaN on dropout)."""
+        wind_speed_ms, wind_dir_deg`` (NaN on dropout)."""
         st = self.true_state()
         true = {f"x{i + 1}_c": float(st.x_sensor_k[i] - T_ZERO) for i in range(5)}
         true["t_room_c"] = float(self.room_c(self.time_s))

@@ -8,8 +8,7 @@ Error model (docs/model.md#plant-sensors), all seeded:
 * cavity anemometer (unsigned speed): σ = 0.02 m/s below 0.1 m/s, σ = 0.02 m/s + 5 % of
   the reading above; readings clipped at 0;
 * pyranometer: fixed gain error uniform in ±2 %, noise σ = 0.5 % of the reading;
-* wind: speed σ = 0.1 m/s (clipped at 0), direction σ = 3°;
-* barometer (station pressure, hPa): noise σ = 0.1 hPa.
+* wind: speed σ = 0.1 m/s (clipped at 0), direction σ = 3°.
 
 Faults (for fault-handling tests), per sensor from a start time: ``dropout`` (NaN),
 ``stuck`` (the reading at the fault start, or a given value) and ``spikes`` (with a given
@@ -25,7 +24,7 @@ from typing import Literal
 import numpy as np
 
 SENSOR_NAMES = ("x1_c", "x2_c", "x3_c", "x4_c", "x5_c", "t_room_c", "v_cav_ms", "t_out_c",
-                "ghi_wm2", "wind_speed_ms", "wind_dir_deg", "pressure_hpa")
+                "ghi_wm2", "wind_speed_ms", "wind_dir_deg")
 THERMOCOUPLES = ("x1_c", "x2_c", "x3_c", "x4_c", "x5_c", "t_room_c", "t_out_c")
 
 
@@ -95,7 +94,6 @@ class SensorConfig:
     pyranometer_sigma_rel: float = 0.005
     wind_sigma_ms: float = 0.1
     wind_dir_sigma_deg: float = 3.0
-    barometer_sigma_hpa: float = 0.1
     faults: tuple[SensorFault, ...] = field(default_factory=tuple)
 
 
@@ -143,8 +141,6 @@ class SensorBank:
                                    + c.wind_sigma_ms * float(rng.standard_normal()))
         out["wind_dir_deg"] = (true["wind_dir_deg"]
                                + c.wind_dir_sigma_deg * float(rng.standard_normal())) % 360.0
-        out["pressure_hpa"] = (true["pressure_hpa"]
-                               + c.barometer_sigma_hpa * float(rng.standard_normal()))
         return out
 
     def read(self, true: dict[str, float], t: float) -> dict[str, float]:
