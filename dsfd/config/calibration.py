@@ -26,6 +26,7 @@ YAML shape (every key optional; the defaults suit a 1-minute controller cycle)::
       offset_tracking_s: 600      # offsets follow each measurement between fits (τ)
       innovation_smoothing_s: [300, 1800, 1800, 300]  # ... through a low-pass per node x1..x4
       broyden_updates: 1          # Broyden Jacobian updates between finite differences
+      identifiability_sd_ratio: 1.0  # < 1: a parameter moves only where the window determines it
       measurement_gain: [1, 0.3, 0.3, 1, 1]  # state update: weight of a reading of x1..x5
       spike_threshold_k: 3.0      # isolated temperature jumps treated as missing
       fixed: []                   # parameters never calibrated on this panel
@@ -96,6 +97,14 @@ class Calibration:
         "the start of every fit (within ½–3× the scales above)")
     prior_weight: float = setting(
         1.0, doc="Weight of the arrival cost (prior) term; 0 switches it off", ge=0, le=1e6)
+    identifiability_sd_ratio: float = setting(
+        1.0, doc="Below 1, a parameter moves in an on-line window fit only if the window "
+        "determines it: the window's data alone, with the first prior, shrink its standard "
+        "deviation below this fraction of the first prior's (Fisher information at the start "
+        "point, docs/model.md#identifiability). Undetermined ones stay where the prior puts "
+        "them instead of drifting to a bound to absorb another parameter's error. 1 "
+        "(default) lets every excited parameter move: on the README dry run 0.5 held wrong "
+        "estimates and doubled the cavity air's one-step error", gt=0, le=1)
     prior_log_sd: float = setting(
         0.7, doc="Standard deviation of log θ around the panel defaults (first prior)",
         gt=0, le=5)

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dsfd.drivers.base import Command
-from dsfd.estimation.observer import fill_state
+from dsfd.estimation.observer import fill_state, probe_to_state
 from dsfd.estimation.params import with_offsets
 from dsfd.physics.constants import T_ZERO
 from dsfd.physics.coupling import StepInputs
@@ -43,7 +43,8 @@ class StatePrediction:
     Attributes
     ----------
     x_k : ndarray (6,), [K]
-        Predicted x1..x6 at this cycle.
+        Predicted readings of x1..x5 at this cycle (the cavity-air probe's for x5,
+        docs/model.md#cavity-probe) and x6.
     v_cav_ms : float, [m/s]
         Predicted mean cavity speed over the step, unsigned (the anemometer reads |v|).
     heat_w : dict
@@ -129,8 +130,11 @@ class StateObserver:
                                   theta)
             if np.all(np.isfinite(res.x_next)):
                 x_pred = res.x_next[0]
+                readings = x_pred.copy()
+                readings[4] = res.x5_probe_k[0]
+                y = probe_to_state(y[None], res.x_next[:, 4], res.x5_probe_k)[0]
                 prediction = StatePrediction(
-                    x_pred.copy(), abs(float(res.v_cav_ms[0])),
+                    readings, abs(float(res.v_cav_ms[0])),
                     {"q_cv_rd": float(res.q_cv_rd_w[0]), "q_sol_trans": float(res.q_sol_w[0]),
                      "q_air": float(res.q_air_w[0]),
                      "q_da": float(np.broadcast_to(res.q_da_w, (1,))[0])})
@@ -160,9 +164,10 @@ class StateObserver:
 def horizon_end(model: LumpedModel, optics: FacadeOptics, forecast: Forcing, x_k: np.ndarray,
                 applied: Command, theta: np.ndarray, offsets: np.ndarray, *,
                 coupling_tol_k: float | None = None) -> np.ndarray | None:
-    """x1..x6 at the end of the horizon [K] with ``applied`` held from ``x_k`` on the
-    ``forecast``, as the optimiser predicts it (same model, θ̂ and heat-flux offsets
-    [W/m2]); None if the rollout is not finite. One candidate, ``len(forecast)`` steps.
+    """x1..x6 at the end of the horizon [K] (the probe's reading for x5) with ``applied``
+    held from ``x_k`` on the ``forecast``, as the optimiser predicts it (same model, θ̂ and
+    heat-flux offsets [W/m2]); None if the rollout is not finite. One candidate,
+    ``len(forecast)`` steps.
 
     ``coupling_tol_k`` [K] loosens the thermal–airflow fixed point (the daemon passes the
     optimiser's screening tolerance, 0.1 K: half the coupling evaluations, end states within
@@ -174,5 +179,6 @@ def horizon_end(model: LumpedModel, optics: FacadeOptics, forecast: Forcing, x_k
     traj = model.rollout(x_k, np.full((1, steps), applied.afr),
                          np.full((1, steps), applied.or_pct / 100.0), inp, theta,
                          coupling_tol_k=coupling_tol_k)
-    x_end = traj.x[0, -1]
+    x_end = np.array(traj.x[0, -1])
+    x_end[4] = traj.x5_probe[0, -1]  # what the probe will read (docs/model.md#cavity-probe)
     return x_end if np.all(np.isfinite(x_end)) else None

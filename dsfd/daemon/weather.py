@@ -12,8 +12,9 @@ pressure. Per cycle at time t_k:
   interval from t_k (air, wind and room held, clearness index held along the sun's path);
 * outdoor air and GHI are required (without them neither the optimiser nor the baseline can
   decide); a missing wind reading is taken as calm, a missing direction as wind normal to the
-  façade, a missing pressure as the standard atmosphere — each assumption is returned as a
-  note for the decision trace;
+  façade, a missing pressure as the standard atmosphere of the site's elevation, a missing
+  humidity as the sky model's default dew point — each wind assumption is returned as a note
+  for the decision trace;
 * the room air temperature comes from the ``t_room_c`` sensor or ``room.t_in_c`` per
   ``daemon.room_temperature_source``.
 """
@@ -91,13 +92,13 @@ def measured_weather(cfg: PanelConfig, sample: Sample) -> CycleWeather:
     if wind_dir is None:
         notes.append("wind direction unknown: normal to the facade assumed")
     pressure_hpa = sample.good("pressure_hpa")
-    # Dew point: not read (only the Clark-Allen sky model uses it; model_weather's default).
     w = model_weather(
         time_s=np.array([sample.time_s - 0.5 * cfg.model.step_s]),
         t_out_c=sample.good("t_out_c"), ghi_wm2=sample.good("ghi_wm2"),
         wind_speed_ms=wind, wind_dir_deg=wind_dir,
         pressure_pa=None if pressure_hpa is None else pressure_hpa * 100.0,
-        t_in_c=t_room_c, room=cfg.room, facade_azimuth_deg=cfg.facade.azimuth_deg,
+        rh_pct=sample.good("rh_pct"), t_in_c=t_room_c, room=cfg.room,
+        facade_azimuth_deg=cfg.facade.azimuth_deg,
         elevation_m=cfg.site.elevation_m)
     return CycleWeather(w, facade_forcing(cfg, w), (), tuple(notes), t_room_c, room_source)
 

@@ -27,6 +27,16 @@ Notes
   evaluations; each accepted step costs one more batched rollout for the Jacobian, or,
   with ``broyden`` > 0, a Broyden rank-one update of the previous one (Broyden 1965;
   Dennis & Schnabel 1996, §8.1) between finite-difference refreshes.
+* Identifiability (docs/model.md#identifiability): with ``determined_sd_ratio`` < 1 (the
+  on-line updates), the Jacobian at the start point first decides which free parameters
+  the window determines — those whose sd under the window's data and the *first* prior
+  alone, √[(JᵀJ/m_r + P₀⁻¹)⁻¹]_jj with the residuals in their scales σ_T, σ_v, falls below
+  that fraction of the first prior's √P₀_jj (a local, linearised Fisher-information test;
+  the marginal, so a parameter that only a combination with another determines, such as
+  h_out with x1's offset at night, is not). Only those are fitted; the others keep the
+  arrival cost's mean. Without it, an undetermined parameter moves along the ridge the data
+  leave flat, and over many windows walks to a bound absorbing another parameter's or the
+  model's error.
 """
 
 from __future__ import annotations
@@ -86,6 +96,7 @@ class FitResult:
     cov_z : ndarray (9, 9)
         Posterior covariance in z for the free block, the prior elsewhere.
     free : ndarray (9,), bool
+        Parameters the fit moved (the window determined them).
     cost : float
         Final robust cost (data + prior).
     cost_start : float
@@ -121,7 +132,7 @@ def _prior_rows(cov_free: np.ndarray, weight: float) -> np.ndarray:
 def fit_window(problem: WindowProblem, space: ParameterSpace, *, prior_z: np.ndarray,
                prior_cov: np.ndarray, free: np.ndarray, loss: str, f_scale: float,
                prior_weight: float, max_nfev: int, broyden: int = 0,
-               adaptive_scales: bool = False,
+               adaptive_scales: bool = False, determined_sd_ratio: float = 1.0,
                progress: Callable[[int, int, float], None] | None = None) -> FitResult:
     """Fit the free parameters of θ on one window.
 
@@ -147,6 +158,8 @@ def fit_window(problem: WindowProblem, space: ParameterSpace, *, prior_z: np.nda
     adaptive_scales : bool
         Re-estimate each output's residual scale at the start point
         (:meth:`WindowProblem.rescaled`) before fitting.
+    determined_sd_ratio : float
+        Fit only the free parameters the window determines (module Notes); 1 fits them all.
     progress : callable (nfev, max_nfev, cost), optional
         Called after every residual evaluation.
 
@@ -160,6 +173,8 @@ def fit_window(problem: WindowProblem, space: ParameterSpace, *, prior_z: np.nda
                                  progress=progress, max_nfev=max_nfev)
     if adaptive_scales:
         objective.rescale()
+    if determined_sd_ratio < 1.0 and objective.idx.size and objective.problem.n_residuals:
+        objective = objective.restricted_to_determined(determined_sd_ratio)
     problem, idx, x0 = objective.problem, objective.idx, objective.x0
     if idx.size == 0 or problem.n_residuals == 0:
         r0 = objective.residuals(x0) if idx.size else np.zeros(0)
@@ -200,6 +215,7 @@ class _WindowObjective:
         self.lo, self.hi = space.z_lower[idx], space.z_upper[idx]
         span = self.hi - self.lo
         self.x0 = np.clip(self.prior_z[idx], self.lo + 1e-6 * span, self.hi - 1e-6 * span)
+        self.prior_cov, self.prior_weight = prior_cov, prior_weight
         self.a_prior = _prior_rows(prior_cov[np.ix_(idx, idx)], prior_weight)
         is_offset = np.arange(space.is_log.size) >= N_PARAMS
         self.fd_step = np.where(space.is_log, FD_STEP_LOG,
@@ -212,6 +228,36 @@ class _WindowObjective:
         self._last: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
         self._jac: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None  # J, x, r
         self._since_fd = broyden
+
+    def restricted_to_determined(self, ratio: float) -> _WindowObjective:
+        """The objective over the free parameters that the window determines (module Notes),
+        with the start point's Jacobian carried over; ``self`` if it determines them all."""
+        x0, m = self.x0, self.problem.n_residuals
+        out = self.residuals(x0)
+        j_data = self.jacobian(x0)[:m]
+        # in the residuals' own scales (σ_T, σ_v): the misfit of a start far from the
+        # truth is no measure of the noise the data are determined against
+        info = _data_information(j_data, None, self.problem)
+        prior_sd = self.space.prior_sd[self.idx]
+        post = np.linalg.inv(info + np.diag(1.0 / prior_sd ** 2))
+        keep = np.sqrt(np.clip(np.diag(post), 0.0, None)) < ratio * prior_sd
+        if keep.all():
+            return self
+        free = self.free.copy()
+        free[self.idx[~keep]] = False
+        sub = _WindowObjective(self.problem, self.space, prior_z=self.prior_z,
+                               prior_cov=self.prior_cov, free=free, loss=self.loss,
+                               f_scale=self.f_scale, prior_weight=self.prior_weight,
+                               broyden=self.broyden, progress=self.progress,
+                               max_nfev=self.max_nfev)
+        sub.calls = self.calls
+        if keep.any():  # the start point's residuals and Jacobian columns stay valid
+            e, slope = self._last[1], self._last[2]
+            prior_rows = sub.a_prior @ (x0[keep] - sub.prior_z[sub.idx])
+            sub._last = (x0[keep].copy(), e, slope, np.concatenate([out[:m], prior_rows]))
+            sub._jac = (j_data[:, keep], x0[keep].copy(), out[:m].copy())
+            sub._since_fd = 0
+        return sub
 
     def theta_of(self, x: np.ndarray) -> np.ndarray:
         z = self.prior_z.copy()
@@ -240,6 +286,8 @@ class _WindowObjective:
     def jacobian(self, x: np.ndarray) -> np.ndarray:
         out = self.residuals(x)
         m = self.problem.n_residuals
+        if self._jac is not None and np.array_equal(self._jac[1], x):
+            return np.vstack([self._jac[0], self.a_prior])  # the same point: the same J
         if self._jac is not None and self._since_fd < self.broyden:
             # Broyden rank-one update of the data block (robustified residuals)
             prev, x_prev, r_prev = self._jac
@@ -270,17 +318,25 @@ class _WindowObjective:
         return ((pert - e[None, :]) / step[:, None]).T * slope[:, None]
 
 
+def _data_information(j_data: np.ndarray, residual: np.ndarray | None,
+                      problem: WindowProblem) -> np.ndarray:
+    """JᵀJ/(s² m_r): the window's information on the free z (see module Notes); s = 1
+    without ``residual`` (the residuals' configured scales)."""
+    m = problem.n_residuals
+    scale = (max(0.05, 1.4826 * float(np.median(np.abs(residual[:m]))))
+             if m and residual is not None else 1.0)
+    lead = problem.mask.any(axis=-1).sum(axis=1)
+    m_r = float(np.mean(lead[lead > 0])) if np.any(lead > 0) else 1.0
+    return j_data.T @ j_data / (scale * scale * m_r)
+
+
 def _posterior(jac: np.ndarray, residual: np.ndarray, a_prior: np.ndarray,
                problem: WindowProblem) -> np.ndarray:
     """Covariance of the free z from the final Jacobian and residuals (see module Notes)."""
-    m = problem.n_residuals
-    j_data = np.asarray(jac)[:m]
+    j_data = np.asarray(jac)[:problem.n_residuals]
     if j_data.shape[1] == 0:
         return np.zeros((0, 0))
-    scale = max(0.05, 1.4826 * float(np.median(np.abs(residual[:m])))) if m else 1.0
-    lead = problem.mask.any(axis=-1).sum(axis=1)
-    m_r = float(np.mean(lead[lead > 0])) if np.any(lead > 0) else 1.0
-    info = j_data.T @ j_data / (scale * scale * m_r) + a_prior.T @ a_prior
+    info = _data_information(j_data, residual, problem) + a_prior.T @ a_prior
     vals, vecs = np.linalg.eigh(0.5 * (info + info.T))
     vals = np.clip(vals, 1e-12 * max(float(vals.max()), 1e-12), None)
     cov = (vecs / vals) @ vecs.T
@@ -347,7 +403,7 @@ def fit_staged(problem: WindowProblem, space: ParameterSpace, *, prior_z: np.nda
     cov[:, fi] = 0.0
     cov[np.ix_(fi, fi)] = cov_flow[np.ix_(fi, fi)]
     return FitResult(
-        theta=space.to_theta(start), cov_z=cov, free=free,
+        theta=space.to_theta(start), cov_z=cov, free=first.free | second.free,
         cost=first.cost + second.cost, cost_start=first.cost_start + second.cost_start,
         nfev=nfev, njev=njev, n_residuals=first.n_residuals + second.n_residuals,
         success=first.success and second.success,

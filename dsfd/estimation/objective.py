@@ -127,7 +127,7 @@ class WindowProblem:
         traj = self.model.rollout(tile(self.x_start), tile(self.regime), tile(self.or_),
                                   inputs, theta, coupling_tol_k=COUPLING_TOL_K)
         out = np.empty((r * s, h, N_OUT))
-        out[..., :5] = traj.x[:, 1:, :5]
+        out[..., :5] = traj.readings()
         out[..., 5] = np.abs(traj.v_cav_ms)
         return out.reshape(r, s, h, N_OUT)
 

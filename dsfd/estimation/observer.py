@@ -74,6 +74,21 @@ def spike_mask(y: np.ndarray, threshold: float) -> np.ndarray:
     return out
 
 
+def probe_to_state(y5: np.ndarray, x5_pred: np.ndarray, x5_probe: np.ndarray) -> np.ndarray:
+    """Readings with the cavity-air probe's turned into the model's x5 [K] (…, 5).
+
+    The probe reads T_in + p(a)(x5 − T_in), not the column mean x5
+    (docs/model.md#cavity-probe); the reading moves the estimate by its innovation against
+    the predicted probe value, y5 − (probe − x5_pred): the predicted stratification is
+    taken off the reading (slope 1 instead of 1/p, p ∈ [1, 1.15]; the cavity air's time
+    constant of about 30 s makes the difference vanish within the next step).
+    """
+    out = np.array(np.broadcast_to(y5, np.broadcast_shapes(np.shape(y5),
+                                                           (*np.shape(x5_pred), 5))), float)
+    out[..., 4] = out[..., 4] - (np.asarray(x5_probe) - np.asarray(x5_pred))
+    return out
+
+
 def fill_state(y5: np.ndarray, x_pred: np.ndarray, *, has_louver: bool,
                gain: float | tuple[float, ...] | np.ndarray = 1.0) -> np.ndarray:
     """Measurement update: measured x1..x5 correct the prediction, x6 by the observer.
@@ -144,7 +159,8 @@ def observer_step(model: LumpedModel, steps: StepData, k: int, x_hat: np.ndarray
     x_hat = np.broadcast_to(np.asarray(x_hat, float), (nb, 6))
     res = model.step(x_hat, np.full(nb, steps.regime[k]), steps.or_[k], inp,
                      theta[:, :N_PARAMS])
-    x_new = fill_state(y_next, res.x_next, has_louver=model.cfg.louver is not None,
+    y_state = probe_to_state(y_next, res.x_next[:, X5], res.x5_probe_k)
+    x_new = fill_state(y_state, res.x_next, has_louver=model.cfg.louver is not None,
                        gain=model.cfg.calibration.measurement_gain)
     return x_new, res.x_next, res.v_cav_ms
 

@@ -84,6 +84,7 @@ def _rollouts(model: LumpedModel, steps: StepData, starts: np.ndarray, x0: np.nd
         tr = model.rollout(x0[b], steps.regime[idx[b]], steps.or_[idx[b]], inp,
                            theta[b][:, None, :N_PARAMS])
         xs[b], vs[b] = tr.x, np.abs(tr.v_cav_ms)
+        xs[b, 1:, :5] = tr.readings()  # scored against the sensors: the probe's x5
     return xs, vs
 
 

@@ -21,7 +21,7 @@ import numpy as np
 
 from dsfd.config.parameters import Param
 from dsfd.physics.airflow import IB, IT, AirflowGeometry, FlowState
-from dsfd.physics.cavity_profile import outlet_excess_ratio
+from dsfd.physics.cavity_profile import outlet_excess_ratio, probe_excess_ratio
 from dsfd.physics.constants import SIGMA
 from dsfd.physics.network import X5, Boundary, assemble, boundary_heat_in
 from dsfd.physics.regimes import FlowSetup, PathFlow, inflow, opening_flows, path_flows
@@ -116,6 +116,10 @@ class StepResult(NamedTuple):
     t5_ahead_k : [K]
         x5 at the end of a further step under this step's frozen network (warm start of
         the next coupling under unchanged controls).
+    x5_probe_k : [K]
+        What the cavity-air probe reads at the end of the step (docs/model.md#cavity-probe):
+        T_inflow + p(a) (x5 − T_inflow) with this step's flow; x5 without flow, for a
+        well-mixed node, or a probe that reads the mean.
     """
 
     x_next: np.ndarray
@@ -131,6 +135,7 @@ class StepResult(NamedTuple):
     converged: np.ndarray
     coupling_slope: np.ndarray
     t5_ahead_k: np.ndarray
+    x5_probe_k: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -153,6 +158,8 @@ class NetworkConstants:
     zoh: str
     q_air_basis: str
     cavity_profile: str  # "well_mixed" (paper) or "exponential" (ISO 15099 ventilated gap)
+    #: Height of the x5 probe from the inlet over the cavity height (None: it reads x5).
+    probe_height_frac: float | None = None
 
 
 _SECANT_A = np.array([1, 0, 0, 3, 0, 2])  # first node of each radiative pair
@@ -212,21 +219,26 @@ class FlowTerms(NamedTuple):
     g_adv: np.ndarray  # advective conductance of the x5 balance, k c_p ṁ_in/A_f [W/(m2 K)]
     t_inflow: np.ndarray  # mixed inflow temperature [K]
     outlet_ratio: np.ndarray  # k: outlet excess over the inflow per unit of x5's [-]
+    probe_ratio: np.ndarray  # p: the probe's excess over the inflow per unit of x5's [-]
 
 
-def outlet_ratio(nc: NetworkConstants, lap0: np.ndarray, g_flow: np.ndarray) -> np.ndarray:
-    """k of the cavity air profile (1 well mixed) for the flow conductance ``g_flow``.
+def profile_ratios(nc: NetworkConstants, lap0: np.ndarray,
+                   g_flow: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """k and p of the cavity air profile (both 1 well mixed) for the flow conductance
+    ``g_flow``: the outlet's and the probe's excess over the inflow per unit of x5's.
 
     The surfaces' conductance to the air is the x5 diagonal of the airflow-free network
     (h_ca1 + a_L h_ca2 + h_ca3); a panel without louver has the placeholder link to the
     louver node in it, which is not a surface.
     """
     if nc.cavity_profile == "well_mixed":
-        return np.ones_like(g_flow)
+        return np.ones_like(g_flow), np.ones_like(g_flow)
     g_surf = -lap0[:, X5, X5] - (0.0 if nc.has_louver else NO_LOUVER_LINK)
     moving = g_flow > 0
-    return outlet_excess_ratio(np.where(moving, g_surf / np.where(moving, g_flow, 1.0),
-                                        np.inf))
+    ntu = np.where(moving, g_surf / np.where(moving, g_flow, 1.0), np.inf)
+    probe = (np.ones_like(g_flow) if nc.probe_height_frac is None
+             else probe_excess_ratio(ntu, nc.probe_height_frac))
+    return outlet_excess_ratio(ntu), probe
 
 
 def with_flow(nc: NetworkConstants, t5: np.ndarray, setup: FlowSetup, lap0: np.ndarray,
@@ -241,13 +253,13 @@ def with_flow(nc: NetworkConstants, t5: np.ndarray, setup: FlowSetup, lap0: np.n
     pf = path_flows(setup, t5, nc.geom, active=active)
     m_in, t_inflow = inflow(setup, pf)
     g_flow = nc.cp_air * m_in / nc.geom.facade_area_m2
-    k = outlet_ratio(nc, lap0, g_flow)
+    k, p = profile_ratios(nc, lap0, g_flow)
     g_adv = k * g_flow
     lap = lap0.copy()
     q = q0.copy()
     lap[:, X5, X5] -= g_adv
     q[:, X5] += g_adv * t_inflow
-    return lap, q, FlowTerms(pf, g_adv, t_inflow, k)
+    return lap, q, FlowTerms(pf, g_adv, t_inflow, k, p)
 
 
 def exhaust_temperature(x5: np.ndarray, t_inflow: np.ndarray, k: np.ndarray) -> np.ndarray:
@@ -287,7 +299,7 @@ def coupled_step(nc: NetworkConstants, x: np.ndarray, inp: StepInputs, theta: np
         return _ping_pong(nc, x, inp, lap0, q0, bnd0, setup)
     nb = x.shape[0]
     out_flow, out_rho, out_g, out_tin = np.zeros(nb), np.zeros(nb), np.zeros(nb), np.zeros(nb)
-    out_k = np.ones(nb)
+    out_k, out_p = np.ones(nb), np.ones(nb)
     out_m9 = np.zeros((nb, 4)) if setup.any_all_open else None
     exact = nc.zoh == "eig"
     lam, vec, x_star = np.empty((nb, 6)), np.empty((nb, 6, 6)), np.empty((nb, 6))
@@ -311,12 +323,13 @@ def coupled_step(nc: NetworkConstants, x: np.ndarray, inp: StepInputs, theta: np
         pf = ft.flow
         if whole:
             out_flow[:], out_rho[:], out_g[:] = pf.flow, pf.rho_c, ft.g_adv
-            out_tin[:], out_k[:] = ft.t_inflow, ft.outlet_ratio
+            out_tin[:], out_k[:], out_p[:] = ft.t_inflow, ft.outlet_ratio, ft.probe_ratio
         else:
             lap, q = lap[rows], q[rows]
             out_flow[rows], out_rho[rows], out_g[rows] = (pf.flow[rows], pf.rho_c[rows],
                                                           ft.g_adv[rows])
             out_tin[rows], out_k[rows] = ft.t_inflow[rows], ft.outlet_ratio[rows]
+            out_p[rows] = ft.probe_ratio[rows]
         if out_m9 is not None:
             r9 = setup.rows_all_open
             if whole:
@@ -349,7 +362,7 @@ def coupled_step(nc: NetworkConstants, x: np.ndarray, inp: StepInputs, theta: np
     bnd = bnd0._replace(g_adv=out_g, t_inflow=out_tin)
     air = q_air(nc, flow.m_dot, exhaust_temperature(x_mean[:, X5], out_tin, out_k), inp)
     return _result(nc, x_next, x_mean, flow, inp, bnd, fp.evaluations, fp.converged, air,
-                   slope=fp.slope, t5_ahead=ahead)
+                   slope=fp.slope, t5_ahead=ahead, probe_ratio=out_p)
 
 
 def _ping_pong(nc: NetworkConstants, x, inp, lap0, q0, bnd0, setup) -> StepResult:
@@ -374,16 +387,19 @@ def _ping_pong(nc: NetworkConstants, x, inp, lap0, q0, bnd0, setup) -> StepResul
         gt_acc += g * tin / n_sub
         t_exhaust = exhaust_temperature(st.x_mean[:, X5], tin, ft.outlet_ratio)
         air_acc += q_air(nc, fs.m_dot, t_exhaust, inp) / n_sub
-        xs, label = st.x_next, fs.label
+        xs, label, probe = st.x_next, fs.label, ft.probe_ratio
     tin = np.where(g_acc > 0, gt_acc / np.where(g_acc > 0, g_acc, 1.0), inp.t_in_k)
     bnd = bnd0._replace(g_adv=g_acc, t_inflow=tin)
     return _result(nc, xs, mean, FlowState(m_acc, label, q_acc), inp, bnd,
-                   np.full(nb, n_sub), np.ones(nb, bool), air_acc)
+                   np.full(nb, n_sub), np.ones(nb, bool), air_acc, probe_ratio=probe)
 
 
 def _result(nc: NetworkConstants, x_next, x_mean, flow, inp, bnd, evals, conv, air,
-            slope=None, t5_ahead=None) -> StepResult:
+            slope=None, t5_ahead=None, probe_ratio=None) -> StepResult:
     a_f = nc.geom.facade_area_m2
+    x5 = x_next[:, X5]
+    probe = (x5 if probe_ratio is None
+             else np.where(bnd.g_adv > 0, bnd.t_inflow + probe_ratio * (x5 - bnd.t_inflow), x5))
     x3 = x_mean[:, 2]
     q_cv_rd = a_f * (bnd.h_in * (x3 - inp.t_in_k) + bnd.h_rad_in * (x3 - inp.t_mrt_k))
     return StepResult(
@@ -400,4 +416,5 @@ def _result(nc: NetworkConstants, x_next, x_mean, flow, inp, bnd, evals, conv, a
         converged=conv,
         coupling_slope=np.full(x_next.shape[0], np.nan) if slope is None else slope,
         t5_ahead_k=x_next[:, X5] if t5_ahead is None else t5_ahead,
+        x5_probe_k=probe,
     )

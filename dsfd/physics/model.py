@@ -54,6 +54,8 @@ class Trajectory(NamedTuple):
     heat_in_wm2 : (B, H), [W/m2]
         Net heat into the network (energy balance).
     evaluations : (B, H), int
+    x5_probe : (B, H), [K]
+        What the cavity-air probe reads at the end of each step (StepResult.x5_probe_k).
     """
 
     x: np.ndarray
@@ -67,6 +69,14 @@ class Trajectory(NamedTuple):
     q_da_w: np.ndarray
     heat_in_wm2: np.ndarray
     evaluations: np.ndarray
+    x5_probe: np.ndarray
+
+    def readings(self) -> np.ndarray:
+        """What the x1..x5 sensors read at the end of each step (B, H, 5) [K]: the states,
+        with the cavity-air probe's reading for x5 (docs/model.md#cavity-probe)."""
+        out = np.array(self.x[:, 1:, :5])
+        out[..., 4] = self.x5_probe
+        return out
 
 
 def network_constants(cfg: PanelConfig) -> NetworkConstants:
@@ -112,6 +122,7 @@ def network_constants(cfg: PanelConfig) -> NetworkConstants:
         zoh=mo.zoh,
         q_air_basis=mo.q_air_basis,
         cavity_profile=mo.cavity_air_profile,
+        probe_height_frac=0.5 if mo.cavity_air_probe == "mid_height" else None,
     )
 
 
@@ -271,6 +282,7 @@ class LumpedModel:
             q_da_w=stack(lambda r: np.broadcast_to(r.q_da_w, (nb,))),
             heat_in_wm2=stack(lambda r: r.heat_in_wm2),
             evaluations=stack(lambda r: r.evaluations),
+            x5_probe=stack(lambda r: r.x5_probe_k),
         )
 
     def steady_state(self, regime: np.ndarray, or_: np.ndarray, inputs: StepInputs,

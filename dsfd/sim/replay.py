@@ -2,12 +2,15 @@
 
 The bundled files were measured in Colorado; a panel elsewhere replays them at the same
 local solar time at its own longitude (:func:`dsfd.weather.shift_to_site`), so measured
-irradiance and the sun position computed for the site agree. Every shift is recorded in
-the series' notes, which callers print.
+irradiance and the sun position computed for the site agree, and with the air pressure of
+its own elevation (:func:`move_pressure`), so the simulated plant breathes the air that a
+station at the site would measure and that the daemon models (docs/model.md#inputs). Every
+shift is recorded in the series' notes, which callers print.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping
 from pathlib import Path
@@ -15,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from dsfd.config.panel import Facade, PanelConfig, Room
-from dsfd.physics.boundary import WeatherInputs, model_weather
+from dsfd.physics.boundary import WeatherInputs, model_weather, standard_pressure_pa
 from dsfd.weather import (
     BUNDLED_WEATHER,
     CHANNELS,
@@ -41,11 +44,43 @@ def load_weather(spec: str | Path) -> WeatherSeries:
     return read_weather(path)
 
 
+#: Move the pressure when its elevation and the site's differ by more than this [m].
+ELEVATION_THRESHOLD_M = 1.0
+
+
 def at_site(series: WeatherSeries, cfg: PanelConfig) -> WeatherSeries:
-    """The series replayed at the panel's longitude if it was measured elsewhere."""
+    """The series replayed at the panel's longitude and elevation if it was measured elsewhere.
+
+    Idempotent: a series already at the site is returned as it is.
+    """
     if abs(series.station_longitude_deg - cfg.site.longitude_deg) > SHIFT_THRESHOLD_DEG:
-        return _shift(series, longitude_deg=cfg.site.longitude_deg)
-    return series
+        series = _shift(series, longitude_deg=cfg.site.longitude_deg)
+    return move_pressure(series, elevation_m=cfg.site.elevation_m)
+
+
+def move_pressure(series: WeatherSeries, *, elevation_m: float) -> WeatherSeries:
+    """The series with its pressure moved to ``elevation_m`` [m] above sea level.
+
+    Notes
+    -----
+    The record's pressure is scaled by the ratio of the standard atmosphere's pressures at
+    the two elevations (ISO 2533 troposphere,
+    :func:`~dsfd.physics.boundary.standard_pressure_pa`),
+    so its weather-driven variation is kept in proportion: the Golden CO record's 817 hPa
+    (mean of 1–4 January 2022, 1829 m) becomes 1015 hPa at Suwon's 40 m. Only the pressure
+    moves; the temperatures, the irradiance and the wind stay as measured (the record's
+    climate, not the site's).
+    """
+    current = (series.station_elevation_m if series.pressure_elevation_m is None
+               else series.pressure_elevation_m)
+    if abs(current - elevation_m) <= ELEVATION_THRESHOLD_M:
+        return series
+    ratio = standard_pressure_pa(elevation_m) / standard_pressure_pa(current)
+    note = (f"pressure moved from {current:g} m to {elevation_m:g} m above sea level "
+            f"(x{ratio:.4f}, standard atmosphere)")
+    kept = tuple(n for n in series.notes if not n.startswith("pressure moved from "))
+    return dataclasses.replace(series, pressure_pa=series.pressure_pa * ratio,
+                               pressure_elevation_m=float(elevation_m), notes=(*kept, note))
 
 
 def step_window(series: WeatherSeries, step_s: float, *, start_s: float | None = None,

@@ -56,6 +56,9 @@ class WeatherSeries:
         Citation / licence line to show wherever the data are used.
     shift_s : float, [s]
         Time shift applied by :func:`shift_to_site` (0 for the station's own clock).
+    pressure_elevation_m : float or None, [m]
+        Elevation that ``pressure_pa`` refers to: None for the station's own, else the
+        elevation :func:`dsfd.sim.replay.at_site` moved it to.
     notes : tuple of str
         Human-readable processing history.
     """
@@ -76,6 +79,7 @@ class WeatherSeries:
     attribution: str = ""
     shift_s: float = 0.0
     notes: tuple[str, ...] = field(default_factory=tuple)
+    pressure_elevation_m: float | None = None
 
     def __post_init__(self) -> None:
         time = np.array(self.time_s, dtype=np.float64).reshape(-1)

@@ -27,7 +27,8 @@ def _traj(cv, sol, air, da):
     return Trajectory(x=np.zeros((1, 3, 6)), x_mean=np.zeros((1, 2, 6)),
                       m_dot=np.zeros((1, 2, 4)), label=np.ones((1, 2), int), v_cav_ms=z,
                       q_cv_rd_w=full(cv), q_sol_w=full(sol), q_air_w=full(air),
-                      q_da_w=full(da), heat_in_wm2=z, evaluations=np.ones((1, 2), int))
+                      q_da_w=full(da), heat_in_wm2=z, evaluations=np.ones((1, 2), int),
+                      x5_probe=np.zeros((1, 2)))
 
 
 def test_objective_signs_follow_eq_4_and_5():

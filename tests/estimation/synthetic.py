@@ -67,13 +67,17 @@ def lumped_record(cfg: PanelConfig, theta: np.ndarray, *, step_s: float = 120.0,
     x0 = model.steady_state([reg[0]], or_[0], inp.at((slice(0, 1),)), theta)
     traj = model.rollout(x0, reg[None], or_[None], inp, theta)
     x = traj.x[0]
+    # the sensors read what the model says they read: the probe's value for x5 (row 0, the
+    # steady start, keeps the state)
+    readings = np.array(x[:, :5])
+    readings[1:] = traj.readings()[0]
     cols: dict[str, np.ndarray] = {
         "phi_deg": np.append(phi, phi[-1]),
         "afr": np.append(reg, reg[-1]).astype(float),
         "or_pct": np.append(or_, or_[-1]) * 100.0,
     }
     for i in range(5):
-        cols[f"x{i + 1}_c"] = x[:, i] - T_ZERO + noise_k * rng.standard_normal(n + 1)
+        cols[f"x{i + 1}_c"] = readings[:, i] - T_ZERO + noise_k * rng.standard_normal(n + 1)
     v = np.concatenate([[traj.v_cav_ms[0, 0]], traj.v_cav_ms[0]])
     cols["v_cav_ms"] = np.abs(np.abs(v) + noise_v * rng.standard_normal(n + 1))
     cols["t_room_c"] = np.full(n + 1, cfg.room.t_in_c)

@@ -13,7 +13,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from dsfd.config.parameters import Param
-from dsfd.physics.cavity_profile import outlet_excess_ratio
+from dsfd.physics.cavity_profile import outlet_excess_ratio, probe_excess_ratio
 from dsfd.physics.constants import T_ZERO
 from dsfd.physics.forcing import FacadeOptics, step_inputs
 from dsfd.physics.model import LumpedModel
@@ -93,3 +93,23 @@ def test_room_gets_the_heat_the_flow_takes_from_the_cavity(suwon):
         assert 1.0 < float(outlet_excess_ratio(a)) < 2.0
     # a hotter outlet for the same kind of step: the room gets more of the cavity's heat
     assert q["exponential"] > q["well_mixed"] > 0
+
+
+@pytest.mark.parametrize("a", [1e-4, 5e-3, 0.02, 0.5, 2.0, 4.4, 10.0, 40.0])
+@pytest.mark.parametrize("zeta", [0.25, 0.5, 0.8])
+def test_the_probe_reads_the_profile_at_its_height(a, zeta):
+    """p(a) against the profile itself: excess at ζ over the excess of a numerically
+    averaged column (midpoint rule, 20 000 slices), independent of the closed form."""
+    z = (np.arange(20_000) + 0.5) / 20_000
+    excess = 1.0 - np.exp(-a * z)  # T(z) − T_in over T_av − T_in
+    expected = (1.0 - np.exp(-a * zeta)) / excess.mean()
+    assert probe_excess_ratio(a, zeta) == pytest.approx(expected, rel=1e-6)
+
+
+def test_the_mid_height_probe_limits():
+    assert probe_excess_ratio(0.0) == pytest.approx(1.0)  # linear profile: mid = mean
+    assert probe_excess_ratio(np.inf) == 1.0  # well mixed
+    a = np.linspace(0.01, 30.0, 3000)
+    p = probe_excess_ratio(a)
+    assert np.all(p >= 1.0) and p.max() == pytest.approx(1.1466, abs=1e-3)
+    assert probe_excess_ratio(3.0, 1.0) == pytest.approx(outlet_excess_ratio(3.0))

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from dsfd.physics.forcing import facade_forcing
-from dsfd.sim.replay import at_site, load_weather, series_inputs
+from dsfd.sim.replay import at_site, load_weather, move_pressure, series_inputs
 from dsfd.weather.series import CHANNELS
 
 #: Two bundled records that measure DNI and DHI besides GHI (both high, dry sites).
@@ -21,8 +21,14 @@ def _with(cfg, method):
 
 
 def _record(cfg, name):
-    """The record's weather at the panel's site: as measured, and with GHI alone."""
-    s = at_site(load_weather(name), cfg)
+    """The record's weather at the panel's longitude: as measured, and with GHI alone.
+
+    The pressure stays the station's own: the beam and diffuse were measured through the
+    air mass of the station's elevation, which DISC's split corrects for (at_site moves the
+    pressure to the panel's elevation for the simulated plant, not the measured split).
+    """
+    raw = load_weather(name)
+    s = move_pressure(at_site(raw, cfg), elevation_m=raw.station_elevation_m)
     channels = {name: getattr(s, name) for name in CHANNELS}
     measured = series_inputs(s.time_s, channels, room=cfg.room, facade=cfg.facade)
     nan = np.full(s.time_s.shape, np.nan)

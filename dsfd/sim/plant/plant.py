@@ -43,9 +43,22 @@ from dsfd.sim.plant.sensors import SensorBank, SensorConfig
 from dsfd.sim.plant.truth_state import TrueState, true_state
 from dsfd.sim.replay import at_site, weather_inputs
 from dsfd.weather import WeatherSeries
+from dsfd.weather.series import interpolate
 
 RoomSchedule = Callable[[np.ndarray], np.ndarray] | Sequence[tuple[float, float]] | None
 _DIAGONAL_PAIRS = ({1, 2}, {0, 3})  # {ET, IB}, {EB, IT}
+
+
+#: What the simulated station reports only where the panel's devices list the signal; without
+#: it, the daemon models the standard atmosphere of the site's elevation and no humidity.
+OPTIONAL_STATION_SIGNALS = ("pressure_hpa", "rh_pct")
+
+
+def configured_signals(cfg: PanelConfig) -> frozenset[str]:
+    """Sensor signals the panel's devices deliver (none for a simulation-only panel)."""
+    if cfg.devices is None:
+        return frozenset()
+    return frozenset(n for d in cfg.devices.entries for n in d.signal_names())
 
 
 @dataclass
@@ -93,6 +106,8 @@ class Plant:
         self.sensor_bank = SensorBank(self.sensor_config, rng_s,
                                       ideal=self.options.sensors == "ideal")
         self._room = room_schedule
+        #: Station channels that only a configured signal reports (a barometer, a hygrometer).
+        self._optional_station = frozenset(OPTIONAL_STATION_SIGNALS) - configured_signals(cfg)
         opt = self.options
         self.actuators = Actuators.for_options(ideal=opt.actuators == "ideal",
                                                rate_degs=opt.louver_rate_degs,
@@ -290,23 +305,30 @@ class Plant:
     def station_weather(self) -> dict[str, float]:
         """True station values: means over the interval that ends now (logger convention).
 
-        GHI is that of the plant's sky (:func:`~dsfd.sim.plant_forcing.station_ghi`).
+        GHI is that of the plant's sky (:func:`~dsfd.sim.plant_forcing.station_ghi`). The
+        pressure is the one the plant's air has (the record's, moved to the site's elevation
+        by :func:`~dsfd.sim.replay.at_site`), and the humidity the record's: what a station
+        at the site reports (docs/model.md#inputs).
         """
         t = self.time_s - 0.5 * min(self._last_len, float(self.cfg.model.step_s))
         w = weather_at(self.series, self.cfg, np.array([t]), self.room_c(np.array([t])))
+        rh = interpolate(self.series, np.array([t]))["rh_pct"]
         return {"t_out_c": float(w.t_out_k[0] - T_ZERO),
                 "ghi_wm2": float(station_ghi(self.cfg.site, w)[0]),
                 "wind_speed_ms": float(w.wind_speed_ms[0]),
-                "wind_dir_deg": float(w.wind_dir_deg[0])}
+                "wind_dir_deg": float(w.wind_dir_deg[0]),
+                "pressure_hpa": float(w.pressure_pa[0]) / 100.0,
+                "rh_pct": float(rh[0])}
 
     def read_sensors(self) -> dict[str, float]:
         """Sensor readings now: ``x1_c..x5_c, t_room_c, v_cav_ms, t_out_c, ghi_wm2,
-        wind_speed_ms, wind_dir_deg`` (NaN on dropout)."""
+        wind_speed_ms, wind_dir_deg, pressure_hpa, rh_pct`` (NaN on dropout)."""
         st = self.true_state()
         true = {f"x{i + 1}_c": float(st.x_sensor_k[i] - T_ZERO) for i in range(5)}
         true["t_room_c"] = float(self.room_c(self.time_s))
         true["v_cav_ms"] = abs(st.v_probe_ms)
-        true.update(self.station_weather())
+        true.update((k, v) for k, v in self.station_weather().items()
+                    if k not in self._optional_station)
         return self.sensor_bank.read(true, self.time_s)
 
     def perfect_forecast(self, n_steps: int) -> WeatherInputs:

@@ -8,7 +8,8 @@ Error model (docs/model.md#plant-sensors), all seeded:
 * cavity anemometer (unsigned speed): σ = 0.02 m/s below 0.1 m/s, σ = 0.02 m/s + 5 % of
   the reading above; readings clipped at 0;
 * pyranometer: fixed gain error uniform in ±2 %, noise σ = 0.5 % of the reading;
-* wind: speed σ = 0.1 m/s (clipped at 0), direction σ = 3°.
+* wind: speed σ = 0.1 m/s (clipped at 0), direction σ = 3°;
+* barometer (station pressure): noise σ = 0.1 hPa; hygrometer: σ = 1 % RH, clipped to 0–100 %.
 
 Faults (for fault-handling tests), per sensor from a start time: ``dropout`` (NaN),
 ``stuck`` (the reading at the fault start, or a given value) and ``spikes`` (with a given
@@ -24,7 +25,7 @@ from typing import Literal
 import numpy as np
 
 SENSOR_NAMES = ("x1_c", "x2_c", "x3_c", "x4_c", "x5_c", "t_room_c", "v_cav_ms", "t_out_c",
-                "ghi_wm2", "wind_speed_ms", "wind_dir_deg")
+                "ghi_wm2", "wind_speed_ms", "wind_dir_deg", "pressure_hpa", "rh_pct")
 THERMOCOUPLES = ("x1_c", "x2_c", "x3_c", "x4_c", "x5_c", "t_room_c", "t_out_c")
 
 
@@ -94,6 +95,8 @@ class SensorConfig:
     pyranometer_sigma_rel: float = 0.005
     wind_sigma_ms: float = 0.1
     wind_dir_sigma_deg: float = 3.0
+    barometer_sigma_hpa: float = 0.1
+    hygrometer_sigma_pct: float = 1.0
     faults: tuple[SensorFault, ...] = field(default_factory=tuple)
 
 
@@ -141,6 +144,12 @@ class SensorBank:
                                    + c.wind_sigma_ms * float(rng.standard_normal()))
         out["wind_dir_deg"] = (true["wind_dir_deg"]
                                + c.wind_dir_sigma_deg * float(rng.standard_normal())) % 360.0
+        if "pressure_hpa" in true:
+            out["pressure_hpa"] = (true["pressure_hpa"]
+                                   + c.barometer_sigma_hpa * float(rng.standard_normal()))
+        if "rh_pct" in true:
+            out["rh_pct"] = min(100.0, max(0.0, true["rh_pct"] + c.hygrometer_sigma_pct
+                                           * float(rng.standard_normal())))
         return out
 
     def read(self, true: dict[str, float], t: float) -> dict[str, float]:
@@ -160,4 +169,4 @@ class SensorBank:
                 out[name] = self._stuck[i]
             elif self.rng.uniform() < fault.probability:
                 out[name] += fault.magnitude * (1.0 if self.rng.uniform() < 0.5 else -1.0)
-        return {name: float(out[name]) for name in SENSOR_NAMES}
+        return {name: float(out[name]) for name in SENSOR_NAMES if name in out}

@@ -16,7 +16,7 @@ from tests.sim.conftest import HOUR, day_start
 
 TRUE = {"x1_c": 5.0, "x2_c": 15.0, "x3_c": 20.0, "x4_c": 25.0, "x5_c": 18.0, "t_room_c": 22.0,
         "v_cav_ms": 0.05, "t_out_c": 2.0, "ghi_wm2": 400.0, "wind_speed_ms": 2.0,
-        "wind_dir_deg": 180.0}
+        "wind_dir_deg": 180.0, "pressure_hpa": 1012.5, "rh_pct": 60.0}
 
 
 def _readings(bank: SensorBank, n: int, true=TRUE, t0: float = 0.0) -> dict[str, np.ndarray]:
@@ -47,6 +47,12 @@ def test_anemometer_and_station_noise():
     gain = slow["ghi_wm2"].mean() / 400.0
     assert abs(gain - 1.0) <= 0.021 and gain == pytest.approx(bank.gain, abs=0.002)
     assert np.all((slow["wind_dir_deg"] >= 0) & (slow["wind_dir_deg"] < 360))
+    # the barometer and the hygrometer: unbiased, σ 0.1 hPa and 1 % RH
+    assert slow["pressure_hpa"].mean() == pytest.approx(1012.5, abs=0.01)
+    assert slow["pressure_hpa"].std() == pytest.approx(0.1, rel=0.1)
+    assert slow["rh_pct"].std() == pytest.approx(1.0, rel=0.1)
+    near_saturation = _readings(bank, 2000, {**TRUE, "rh_pct": 99.5})["rh_pct"]
+    assert near_saturation.max() <= 100.0
 
 
 def test_ideal_sensors_return_the_true_values():
