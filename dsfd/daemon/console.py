@@ -17,6 +17,7 @@ line (it replaces the JSON renderer, it does not sit beside it).
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping, MutableMapping
 from typing import Any
 
@@ -32,6 +33,7 @@ _RESET, _BOLD, _DIM = "\x1b[0m", "\x1b[1m", "\x1b[2m"
 _RED, _YELLOW, _GREEN, _MAGENTA, _CYAN = (f"\x1b[{n}m" for n in (31, 33, 32, 35, 36))
 #: Keys every line carries that the console does not repeat.
 _CONTEXT = {"event", "level", "logger", "timestamp", "panel", "cycle", "exception"}
+_ISO = re.compile(r"\b\d{4}-\d\d-\d\dT(\d\d:\d\d):\d\d(?:\.\d+)?Z\b")
 _HOLD_KINDS = {"hold_started", "hold_ended", "manual_override"}
 _HEADER = (f"{'cycle':>6}  {'time (UTC)':16}  {'by':6}  {'louver':>6}  {'regime':28}  "
            f"{'dampers':>7}  {'calibration':15}  {'decide':>8}")
@@ -93,11 +95,11 @@ class CycleConsoleRenderer:
         elif ev.get("flagged"):
             marks.append(self._paint(f"⚑ {ev['flagged']} flagged", _YELLOW))
         if ev.get("hold"):
-            marks.append(self._paint(f"✋ {ev['hold']}", _MAGENTA, _BOLD))
+            marks.append(self._paint(f"✋ {_clock(str(ev['hold']))}", _MAGENTA, _BOLD))
         if ev.get("wind_override"):
             marks.append(self._paint("WIND safe position", _RED, _BOLD))
         write = ev.get("write")
-        if write and write not in ("verified", "dry run", "unchanged", "skipped"):
+        if write == "failed":  # verified, held (a hold writes nothing) and dry-run are normal
             marks.append(self._paint(f"write {write}", _RED, _BOLD))
         if ev.get("fallback"):
             marks.append(self._paint(f"fallback: {ev['fallback']}", _YELLOW))
@@ -151,6 +153,12 @@ def _parameters(theta: Mapping[str, Any]) -> str:
     if offsets:
         plain.append(f"q_x1..x{len(offsets)} {'/'.join(offsets)} W/m²")
     return "  ".join(plain)
+
+
+def _clock(text: str) -> str:
+    """ISO times in a line shortened to the minute (``2022-01-01T23:55:02Z`` → ``23:55Z``);
+    the cycle's date stands in the same line."""
+    return _ISO.sub(r"\1Z", text)
 
 
 def _cut(text: str, width: int) -> str:

@@ -139,7 +139,7 @@ def test_holds_wind_write_failures_and_calibration_updates_stand_out():
              "flagged_signals": ("x2_c", "t_out_c")}
     line = r(None, "info", dict(cycle)).splitlines()[-1]
     assert line.startswith("    12  2022-01-02 01:00  manual")
-    assert "⚑ x2_c,t_out_c" in line and "✋ operator hold (cli root@vm) until" in line
+    assert "⚑ x2_c,t_out_c" in line and "✋ operator hold (cli root@vm) until 02:55Z" in line
     assert "WIND" in line and "write failed" in line
     update = r(None, "info", {"event": "calibration updated", "cycle": 61, "level": "info",
                               "h_out": 8.414, "n": 1.0, "q_x1": -10.8, "q_x2": 20.3,
