@@ -103,7 +103,12 @@ def shell_blocks(path: Path) -> tuple[list[Block], list[str]]:
 
 
 ALL = [b for p in _pages() for b in shell_blocks(p)[0]]
-TO_RUN = [b for b in ALL if not (b.marker or "").startswith("skip:")]
+#: The blocks to run, a block repeated word for word on another page once (the first).
+_FIRST: dict[tuple[str, str | None], Block] = {}
+for _b in ALL:
+    if not (_b.marker or "").startswith("skip:"):
+        _FIRST.setdefault((_b.text, _b.marker), _b)
+TO_RUN = list(_FIRST.values())
 _INSTALL = re.compile(r"python3 -m venv \.venv && \.venv/bin/pip install -q \S+ && ")
 
 
