@@ -1,6 +1,6 @@
 """dsfd — on-line self-calibrating model-predictive control of double-skin façade panels.
 
-The Python API (the README's "Python API" section has a worked example)::
+The Python API (docs/development.md, "Python API", has a worked example)::
 
     import dsfd
 

@@ -1,4 +1,5 @@
-"""The README's "Python API" example runs as written (examples double as tests)."""
+"""The "Python API" example of docs/development.md (moved there from the README) runs as
+written (examples double as tests)."""
 
 from __future__ import annotations
 
@@ -10,8 +11,8 @@ from tests.conftest import ROOT
 
 
 def readme_example() -> str:
-    """The first ```python block of the README's "## Python API" section."""
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    """The first ```python block of docs/development.md's "## Python API" section."""
+    text = (ROOT / "docs" / "development.md").read_text(encoding="utf-8")
     section = text[text.index("\n## Python API\n"):]
     section = section[:section.index("\n## ", 1)]
     return re.search(r"```python\n(.*?)```", section, re.S).group(1)
@@ -20,7 +21,7 @@ def readme_example() -> str:
 def test_the_python_api_example_runs_and_decides_on_the_panels_actuators(monkeypatch, capsys):
     monkeypatch.chdir(ROOT)  # the example names config/panels/... relative to the checkout
     namespace: dict = {}
-    exec(compile(readme_example(), "README.md (Python API)", "exec"), namespace)
+    exec(compile(readme_example(), "docs/development.md (Python API)", "exec"), namespace)
     panel, decision, update = namespace["panel"], namespace["decision"], namespace["update"]
     assert update.fit is not None and update.state.updates == 1  # the update ran
     assert np.all(update.state.theta >= namespace["calibrator"].space.lower)

@@ -1,4 +1,5 @@
-"""The README's command table lists every ``dsfd`` subcommand, each with what it does."""
+"""The command table of docs/operating.md (moved there from the README) lists every ``dsfd``
+subcommand, each with what it does."""
 
 from __future__ import annotations
 
@@ -18,7 +19,7 @@ def subcommands() -> set[str]:
 
 
 def table_rows() -> list[tuple[str, str]]:
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    text = (ROOT / "docs" / "operating.md").read_text(encoding="utf-8")
     section = text[text.index("\n## Commands\n"):]
     section = section[:section.index("\n## ", 1)]
     return [(m.group(1), m.group(2)) for line in section.splitlines()

@@ -1,7 +1,7 @@
 """``dsfd bench closed-loop``: how much of the achievable saving the controller gets.
 
 For each case — a clear, a mixed and an overcast day of the winter weather, each in the
-heating objective and in the synthetic cooling period (the README's closed-loop case:
+heating objective and in the synthetic cooling period (docs/benchmarks.md's closed-loop case:
 outdoor air +25 K, room 25 °C, cooling objective) — the same truth plant (same seed) runs
 the same window under every controller of :data:`CONTROLLERS`:
 
@@ -54,7 +54,7 @@ CONTROLLERS = BENCH_CONTROLLERS
 SKIES = ("clear", "mixed", "overcast")
 SEASONS = ("heating", "cooling")
 CASES = tuple(f"{sky}-{season}" for sky in SKIES for season in SEASONS)
-#: The synthetic cooling period of the README's closed-loop section.
+#: The synthetic cooling period of docs/benchmarks.md's closed-loop section.
 COOLING_T_OUT_OFFSET_K = 25.0
 COOLING_ROOM_C = 25.0
 WARMUP_H = 6.0

@@ -16,8 +16,8 @@ the result, which this command waits for and prints.
 
 Exit codes: 0 applied (or queued with ``--no-wait``), 1 rejected by the daemon or not
 answered in time, 2 bad request or options, 3 no daemon runs on the state directory (nothing
-queued), 4 the state directory cannot be read or written (permissions: README, "Operator
-commands").
+queued), 4 the state directory cannot be read or written (permissions:
+docs/operating.md, "Permissions").
 """
 
 from __future__ import annotations
@@ -98,8 +98,8 @@ def open_database(state: Path) -> sqlite3.Connection:
 
 
 def access_hint() -> str:
-    return ("run it with sudo, or give your group access to the state directory (README, "
-            "'Operator commands')")
+    return ("run it with sudo, or give your group access to the state directory "
+            "(docs/operating.md, 'Permissions')")
 
 
 def _config_of_last_run(state: Path) -> Any:

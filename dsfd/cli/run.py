@@ -64,6 +64,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=int, default=1, help="seed of the simulated plant")
     p.add_argument("--summary-json", type=Path, default=None, metavar="OUT",
                    help="also write the end-of-run summary as JSON")
+    p.add_argument("--log-format", choices=["auto", "json", "console"], default="auto",
+                   help="json: one JSON object per line (journald, log shippers); console: "
+                   "one aligned line per cycle with events marked, for a person; auto "
+                   "(default): console when stdout is a terminal, else json")
     p.set_defaults(handler=run)
 
 
@@ -161,7 +165,7 @@ def run(args: argparse.Namespace) -> int:
             print(f"dsfd run: {exc}", file=sys.stderr)
             return EXIT_USAGE
         plant = plant_for_run(cfg, opts)
-    configure_logging()
+    configure_logging(json={"auto": None, "json": True, "console": False}[args.log_format])
     _announce(cfg, opts, state_dir, temporary=temporary)
     import sqlite3
 

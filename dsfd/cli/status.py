@@ -10,7 +10,7 @@ cycle, the calibration's age and the parameters sitting at a bound, the operator
 broker (``mqtt_cursor``). ``--json`` prints the same as one JSON object.
 
 Exit codes (as ``systemctl status``, LSB): 0 a daemon is running, 3 none is, 4 the state
-cannot be read (permissions: README, "Operator commands"), 1 no database, 2 bad options.
+cannot be read (permissions: docs/operating.md), 1 no database, 2 bad options.
 """
 
 from __future__ import annotations

@@ -87,7 +87,8 @@ class Calibration:
     loss: Literal["linear", "soft_l1", "huber", "cauchy", "arctan"] = setting(
         "soft_l1", doc="Robust loss ρ (the losses of scipy.optimize.least_squares)")
     f_scale: float = setting(
-        1.0, doc="Soft threshold of the loss, in units of the residual scales", gt=0, le=100)
+        1.0, doc="Soft threshold of the loss, in units of the residual scales",
+        unit="1", gt=0, le=100)
     temperature_scale_k: float = setting(
         0.3, doc="Residual scale σ of the temperatures x1..x5", unit="K", gt=0, le=10)
     velocity_scale_ms: float = setting(
@@ -96,7 +97,8 @@ class Calibration:
         True, doc="Re-estimate each output's residual scale from its prediction errors at "
         "the start of every fit (within ½–3× the scales above)")
     prior_weight: float = setting(
-        1.0, doc="Weight of the arrival cost (prior) term; 0 switches it off", ge=0, le=1e6)
+        1.0, doc="Weight of the arrival cost (prior) term; 0 switches it off",
+        unit="1", ge=0, le=1e6)
     identifiability_sd_ratio: float = setting(
         1.0, doc="Below 1, a parameter moves in an on-line window fit only if the window "
         "determines it: the window's data alone, with the first prior, shrink its standard "
@@ -104,12 +106,12 @@ class Calibration:
         "point, docs/model.md#identifiability). Undetermined ones stay where the prior puts "
         "them instead of drifting to a bound to absorb another parameter's error. 1 "
         "(default) lets every excited parameter move: on the README dry run 0.5 held wrong "
-        "estimates and doubled the cavity air's one-step error", gt=0, le=1)
+        "estimates and doubled the cavity air's one-step error", unit="1", gt=0, le=1)
     prior_log_sd: float = setting(
-        0.7, doc="Standard deviation of log θ around the panel defaults (first prior)",
+        0.7, doc="Standard deviation of log θ around the panel defaults (first prior)", unit="1",
         gt=0, le=5)
     prior_sd_n: float = setting(
-        0.15, doc="Standard deviation of the exponent n around its default (first prior)",
+        0.15, doc="Standard deviation of the exponent n around its default (first prior)", unit="1",
         gt=0, le=1)
     drift_log_sd_per_h: float = setting(
         0.05, doc="Random-walk growth of the prior spread of log θ per √hour, so the "
@@ -145,13 +147,14 @@ class Calibration:
         "the slow panes x2, x3 gain from it). The inner panes sit behind the cavity: their "
         "one-step model error is far below the 0.2 K thermocouple noise, and taking each "
         "reading as it is starts every prediction from that noise. A panel whose panes' "
-        "model error exceeds the sensor noise (long sampling interval) wants 1", gt=0, le=1)
+        "model error exceeds the sensor noise (long sampling interval) wants 1", gt=0, le=1,
+        unit="1")
     spike_threshold_k: float = setting(
         3.0, doc="A temperature sample that jumps by more than this from both neighbours "
         "(which agree) is treated as missing", unit="K", gt=0, le=100)
     fixed: tuple[str, ...] = setting(
         (), doc="Parameters held at their defaults on this panel (in addition to those the "
-        "panel cannot excite)")
+        "panel cannot excite)", choices=FIT_NAMES)
 
     def smoothing_samples(self, step_s: float) -> int:
         """Odd number of samples of :attr:`start_smoothing_s` at sampling interval

@@ -54,14 +54,14 @@ class QualitySettings:
         "devices with a coarse resolution)", ge=3, le=1440)
     stuck_signals: tuple[str, ...] = setting(
         STUCK_SIGNALS, doc="Signals checked for stuck values (not irradiance or wind, which "
-        "sit at 0 for hours at night or in calm, nor a steady room)")
+        "sit at 0 for hours at night or in calm, nor a steady room)", choices=tuple(SENSORS))
     max_rate_k_per_min: float = setting(
         10.0, doc="Largest plausible change of a temperature between two readings, per "
         "minute; a faster jump is flagged RATE (a loose connector, a spike)", unit="K/min",
         gt=0, le=200)
     rate_signals: tuple[str, ...] = setting(
         RATE_SIGNALS, doc="Signals checked for their rate of change (default: the panes, room "
-        "and outdoor air; not the fast louver slat and cavity air)")
+        "and outdoor air; not the fast louver slat and cavity air)", choices=tuple(SENSORS))
     max_sample_age_s: float = setting(
         30.0, doc="A sample older than this when the decision is taken is STALE (a read that "
         "hung); measured in real seconds, also under an accelerated clock", unit="s", gt=0,

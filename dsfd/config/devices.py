@@ -89,8 +89,10 @@ class _Register:
         "big", doc="Register order of 32-bit values (little = CDAB word swap)")
     byte_order: Literal["big", "little"] = setting(
         "big", doc="Byte order inside each register (little = BADC byte swap)")
-    scale: float = setting(1.0, doc="Engineering value = raw · scale + offset")
-    offset: float = setting(0.0, doc="Engineering value = raw · scale + offset")
+    scale: float = setting(1.0, doc="Engineering value = raw · scale + offset",
+                           unit="signal unit per raw count")
+    offset: float = setting(0.0, doc="Engineering value = raw · scale + offset",
+                            unit="signal unit")
 
     def _register_problems(self, nan_value: int | None = None) -> list[Problem]:
         out: list[Problem] = []
@@ -112,6 +114,8 @@ class _Register:
 
 @dataclass(frozen=True, kw_only=True)
 class SensorPoint(_Register):
+    signal: str = setting(doc="Measured signal (dsfd.signals), unit in the name",
+                          choices=tuple(SENSORS))
     table: Literal["input", "holding"] = setting("input", doc="Register table")
     nan_value: int | None = setting(
         None, doc="Raw 'no value' code, e.g. 0x7FFF (bit pattern; negative = two's complement)")
@@ -131,6 +135,8 @@ class SensorPoint(_Register):
 
 @dataclass(frozen=True, kw_only=True)
 class ActuatorPoint(_Register):
+    signal: str = setting(doc="Commanded signal (dsfd.signals), unit in the name",
+                          choices=tuple(ACTUATORS))
     table: Literal["holding"] = setting("holding", doc="Actuators live in holding registers")
 
     def check(self) -> list[Problem]:
@@ -165,7 +171,8 @@ class DeviceConfig:
     """One device: a Modbus server (TCP or an RTU slave) or the serial weather station."""
 
     name: str = setting(doc="Device name used in logs and reading details")
-    kind: Literal["modbus_tcp", "modbus_rtu", "serial_station"] = setting(doc="Protocol")
+    kind: Literal["modbus_tcp", "modbus_rtu", "serial_station"] = setting(
+        doc="Protocol: Modbus TCP, Modbus RTU on a serial line, or the serial weather station")
     tcp: TcpEndpoint | None = setting(None, doc="Endpoint of a modbus_tcp device")
     serial: SerialLine | None = setting(None, doc="Line of a modbus_rtu device or the station")
     device_id: int = setting(1, doc="Modbus device (slave/unit) id", ge=0, le=255)

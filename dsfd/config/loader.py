@@ -99,6 +99,7 @@ def setting(
     gt: float | None = None,
     le: float | None = None,
     lt: float | None = None,
+    choices: tuple[str, ...] | None = None,
     default_factory: Any = MISSING,
 ) -> Any:
     """Declare a settings field with its documentation, unit and numeric bounds.
@@ -113,10 +114,15 @@ def setting(
         Unit of the value, e.g. ``"m"``, ``"W/(m2 K)"``, ``"deg"``.
     ge, gt, le, lt : float, optional
         Inclusive / exclusive numeric bounds (applied to every element of a tuple).
+    choices : tuple of str, optional
+        The allowed names of a string (or of every item of a list of strings) that the
+        class's ``check`` method enforces, e.g. the sensor signals; documentation only here
+        (``Literal`` types carry their own). Listed by docs/configuration.md.
     default_factory : callable, optional
         As for :func:`dataclasses.field`.
     """
-    meta = {"doc": doc, "unit": unit, "ge": ge, "gt": gt, "le": le, "lt": lt}
+    meta = {"doc": doc, "unit": unit, "ge": ge, "gt": gt, "le": le, "lt": lt,
+            "choices": choices}
     if default_factory is not MISSING:
         return field(default_factory=default_factory, metadata=meta)
     return field(default=default, metadata=meta)
@@ -247,7 +253,7 @@ def _convert(tp: Any, value: Any, path: str, issues: list[ConfigIssue], meta: Ma
 
 
 def _bounded(value: float, path: str, issues: list[ConfigIssue], meta: Mapping) -> Any:
-    unit = f" {meta['unit']}" if meta.get("unit") else ""
+    unit = f" {meta['unit']}" if meta.get("unit") not in (None, "1") else ""
     checks = (
         ("ge", lambda b: value >= b, ">="),
         ("gt", lambda b: value > b, ">"),

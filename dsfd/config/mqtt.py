@@ -17,7 +17,7 @@ YAML shape (the ``mqtt:`` section of a panel file; absent or ``null``: no MQTT):
       keepalive_s: 60
       backlog_max_age_h: 24
 
-The password is never written into the panel file (it is world-readable, see the README):
+The password is never written into the panel file (it is world-readable, docs/mqtt.md):
 ``password_file`` names a file holding it. Relative file names (the password, the TLS files)
 are looked up in ``$CREDENTIALS_DIRECTORY`` when it is set (systemd's ``LoadCredential=``),
 else next to the panel file; :mod:`dsfd.integrations.mqtt.link` resolves and reads them when

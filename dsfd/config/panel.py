@@ -62,7 +62,7 @@ class Site:
     utc_offset_h: float = setting(
         0.0, doc="Local standard time offset, for display only", unit="h", ge=-14, le=14
     )
-    albedo: float = setting(0.2, doc="Ground reflectance for ground-diffuse", ge=0, le=1)
+    albedo: float = setting(0.2, doc="Ground reflectance for ground-diffuse", unit="1", ge=0, le=1)
     terrain: Literal["ocean", "flat", "rough", "city"] = setting(
         "city", doc="Wind-profile terrain class (EnergyPlus ER exponent/boundary layer)"
     )
@@ -91,14 +91,21 @@ class GlassLayer:
     """
 
     thickness_m: float = setting(doc="Pane thickness", unit="m", gt=0, le=0.05)
-    solar_transmittance: float = setting(doc="Solar transmittance at normal incidence", ge=0, le=1)
-    solar_reflectance_front: float = setting(doc="Solar reflectance, outdoor side", ge=0, le=1)
-    solar_reflectance_back: float = setting(doc="Solar reflectance, room side", ge=0, le=1)
-    visible_transmittance: float = setting(doc="Visible transmittance", ge=0, le=1)
-    visible_reflectance_front: float = setting(doc="Visible reflectance, outdoor side", ge=0, le=1)
-    visible_reflectance_back: float = setting(doc="Visible reflectance, room side", ge=0, le=1)
-    emissivity_front: float = setting(doc="Hemispherical IR emissivity, outdoor side", gt=0, le=1)
-    emissivity_back: float = setting(doc="Hemispherical IR emissivity, room side", gt=0, le=1)
+    solar_transmittance: float = setting(doc="Solar transmittance at normal incidence",
+                                         unit="1", ge=0, le=1)
+    solar_reflectance_front: float = setting(doc="Solar reflectance, outdoor side",
+                                             unit="1", ge=0, le=1)
+    solar_reflectance_back: float = setting(doc="Solar reflectance, room side",
+                                            unit="1", ge=0, le=1)
+    visible_transmittance: float = setting(doc="Visible transmittance", unit="1", ge=0, le=1)
+    visible_reflectance_front: float = setting(doc="Visible reflectance, outdoor side",
+                                               unit="1", ge=0, le=1)
+    visible_reflectance_back: float = setting(doc="Visible reflectance, room side",
+                                              unit="1", ge=0, le=1)
+    emissivity_front: float = setting(doc="Hemispherical IR emissivity, outdoor side",
+                                      unit="1", gt=0, le=1)
+    emissivity_back: float = setting(doc="Hemispherical IR emissivity, room side",
+                                     unit="1", gt=0, le=1)
     density_kgm3: float = setting(2500.0, doc="Glass density", unit="kg/m3", gt=0)
     heat_capacity_jkgk: float = setting(840.0, doc="Specific heat capacity", unit="J/(kg K)", gt=0)
 
@@ -132,11 +139,15 @@ class Louver:
     slat_width_m: float = setting(doc="Slat width w", unit="m", gt=0)
     slat_pitch_m: float = setting(doc="Vertical slat spacing s", unit="m", gt=0)
     slat_thickness_m: float = setting(doc="Slat thickness", unit="m", gt=0)
-    solar_reflectance_upper: float = setting(doc="Solar reflectance of the upper face", ge=0, lt=1)
-    solar_reflectance_lower: float = setting(doc="Solar reflectance of the lower face", ge=0, lt=1)
-    visible_reflectance_upper: float = setting(doc="Visible reflectance, upper face", ge=0, lt=1)
-    visible_reflectance_lower: float = setting(doc="Visible reflectance, lower face", ge=0, lt=1)
-    emissivity: float = setting(0.9, doc="IR emissivity of both faces", gt=0, le=1)
+    solar_reflectance_upper: float = setting(doc="Solar reflectance of the upper face",
+                                             unit="1", ge=0, lt=1)
+    solar_reflectance_lower: float = setting(doc="Solar reflectance of the lower face",
+                                             unit="1", ge=0, lt=1)
+    visible_reflectance_upper: float = setting(doc="Visible reflectance, upper face",
+                                               unit="1", ge=0, lt=1)
+    visible_reflectance_lower: float = setting(doc="Visible reflectance, lower face",
+                                               unit="1", ge=0, lt=1)
+    emissivity: float = setting(0.9, doc="IR emissivity of both faces", unit="1", gt=0, le=1)
     density_kgm3: float = setting(1400.0, doc="Slat material density", unit="kg/m3", gt=0)
     heat_capacity_jkgk: float = setting(1000.0, doc="Slat heat capacity", unit="J/(kg K)", gt=0)
     segments: int = setting(5, doc="Slat segments in the slat-cell optics (ISO 15099: 5)", ge=1,
@@ -162,7 +173,8 @@ class Louver:
 @dataclass(frozen=True, kw_only=True)
 class Opening:
     area_m2: float = setting(doc="Free area of the fully open damper A_d", unit="m2", gt=0)
-    discharge_coefficient: float = setting(0.6, doc="Discharge coefficient C_d", gt=0, le=1)
+    discharge_coefficient: float = setting(0.6, doc="Discharge coefficient C_d",
+                                           unit="1", gt=0, le=1)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -181,12 +193,12 @@ class WindPressure:
     cp_bottom: tuple[float, ...] = setting(
         (0.644, 0.609, 0.527, 0.336, 0.103, -0.245, -0.532, -0.617, -0.594, -0.445, -0.383,
          -0.314, -0.299),
-        doc="C_p at the bottom openings", ge=-3, le=3,
+        doc="C_p at the bottom openings", unit="1", ge=-3, le=3,
     )
     cp_top: tuple[float, ...] = setting(
         (0.794, 0.721, 0.585, 0.363, 0.077, -0.299, -0.637, -0.749, -0.691, -0.538, -0.460,
          -0.368, -0.363),
-        doc="C_p at the top openings", ge=-3, le=3,
+        doc="C_p at the top openings", unit="1", ge=-3, le=3,
     )
 
     def check(self) -> list[Problem]:
@@ -215,7 +227,8 @@ class Openings:
         doc="Vertical distance between bottom and top damper centres Δz", unit="m", gt=0, le=60
     )
     min_opening_ratio: float = setting(
-        0.01, doc="Floor on OR for an open damper set (docs/model.md#openings)", gt=0, le=1
+        0.01, doc="Floor on OR for an open damper set (docs/model.md#openings)",
+        unit="1", gt=0, le=1
     )
     room_pressure_pa: float = setting(
         0.0, doc="Room pressure P_i at z = 0 relative to outdoors", unit="Pa", ge=-50, le=50
@@ -259,7 +272,7 @@ class Daylight:
     """Daylighting proxy Q_DA (docs/model.md#q-da)."""
 
     luminous_efficacy_lmw: float = setting(110.0, doc="Luminous efficacy K", unit="lm/W", gt=0)
-    utilisation: float = setting(0.3, doc="Coefficient of utilisation CU", ge=0, le=1)
+    utilisation: float = setting(0.3, doc="Coefficient of utilisation CU", unit="1", ge=0, le=1)
     lighting_power_wm2: float = setting(10.0, doc="Lighting power density LPD", unit="W/m2", ge=0)
     illuminance_setpoint_lx: float = setting(500.0, doc="Work-plane set-point E_set", unit="lx",
                                              gt=0)
@@ -269,9 +282,10 @@ class Daylight:
 class Bounded:
     """A calibrated parameter: default (prior) and bounds."""
 
-    default: float = setting(doc="Default / prior value")
-    lower: float = setting(doc="Lower bound", gt=0)
-    upper: float = setting(doc="Upper bound", gt=0)
+    default: float = setting(doc="Default: the model's value before any calibration and the "
+                             "centre of the calibration's prior")
+    lower: float = setting(doc="Lower bound the calibration keeps the parameter above", gt=0)
+    upper: float = setting(doc="Upper bound the calibration keeps the parameter below", gt=0)
 
     def check(self) -> list[Problem]:
         if self.lower >= self.upper:
@@ -292,10 +306,10 @@ class Parameters:
     h_ca3: Bounded = setting(doc="L2 cavity face ↔ cavity air", unit="W/(m2 K)")
     h_ca4: Bounded = setting(doc="DGU faces ↔ gap gas (each face)", unit="W/(m2 K)")
     h_in: Bounded = setting(doc="L3 room face ↔ room air", unit="W/(m2 K)")
-    f: Bounded = setting(doc="Cavity form-loss factor (regimes 1–4, 9)")
+    f: Bounded = setting(doc="Cavity form-loss factor (regimes 1–4, 9)", unit="1")
     c: Bounded = setting(doc="Power-law flow coefficient at OR = 1 (regimes 5–8)",
                          unit="m3/(s Pa^n)")
-    n: Bounded = setting(doc="Power-law exponent (regimes 5–8)")
+    n: Bounded = setting(doc="Power-law exponent (regimes 5–8)", unit="1")
 
     def values(self, what: Literal["default", "lower", "upper"],
                names: tuple[str, ...] = PARAMETER_NAMES) -> tuple[float, ...]:
@@ -312,9 +326,9 @@ class Parameters:
 class PanelConfig:
     """Everything dsfd knows about one panel."""
 
-    panel: PanelInfo = setting(doc="Identity")
+    panel: PanelInfo = setting(doc="Identity of the panel")
     site: Site = setting(doc="Location and surroundings")
-    facade: Facade = setting(doc="Geometry")
+    facade: Facade = setting(doc="Geometry of the façade panel")
     glazing: Glazing = setting(doc="Glass layers")
     louver: Louver | None = setting(doc="Rotating louver in the cavity; null if none")
     openings: Openings = setting(doc="Dampers and airflow boundary")

@@ -56,7 +56,7 @@ class Safety:
     fault_signals: tuple[str, ...] = setting(
         ("t_out_c", "ghi_wm2"),
         doc="While any of these sensors is not GOOD the safe state is commanded (both the "
-        "optimiser and the baseline need outdoor air and irradiance)")
+        "optimiser and the baseline need outdoor air and irradiance)", choices=tuple(SENSORS))
     wind_limit_ms: float = setting(
         15.0, doc="Wind speed at the station above which the louver goes to the wind-safe "
         "angle and exterior dampers close", unit="m/s", gt=0, le=75)

@@ -19,8 +19,8 @@ A request is a mapping of fields (JSON-ready, as stored in the ``commands`` tabl
 Positions left out stay where the actuators are when the daemon applies the command; an
 override without positions holds the panel where it is. ``mode`` sets the objective the
 optimiser and the baseline pursue (docs/model.md#control-objective) in place of the panel
-file's ``control.mode``; it moves nothing by itself and is no hold (README, "Operator
-commands").
+file's ``control.mode``; it moves nothing by itself and is no hold (docs/operating.md,
+"Sharing the panel with people").
 """
 
 from __future__ import annotations

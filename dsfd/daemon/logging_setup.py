@@ -2,7 +2,8 @@
 the same renderer.
 
 * Under systemd (stdout is not a terminal) every line is one JSON object for journald and
-  log shippers; in a terminal the console renderer prints readable, aligned lines.
+  log shippers; in a terminal :mod:`dsfd.daemon.console` prints one aligned line per cycle
+  and marks the events (``dsfd run --log-format json|console`` chooses either).
 * ``panel`` and ``cycle`` are context variables merged into every line, structlog's and the
   standard library's alike (``merge_contextvars`` runs first in the shared chain).
   ``asyncio.to_thread`` copies the context, so lines from the calibration and optimisation
@@ -18,11 +19,13 @@ from __future__ import annotations
 
 import logging
 import sys
-from typing import TextIO
+from typing import Any, TextIO
 
 import structlog
 from structlog.contextvars import bind_contextvars, bound_contextvars, clear_contextvars
+from structlog.typing import EventDict
 
+from dsfd.daemon.console import CONSOLE_ONLY, CycleConsoleRenderer
 from dsfd.drivers.modbus_link import configure_pymodbus_logging
 
 __all__ = [
@@ -44,6 +47,7 @@ def configure_logging(*, stream: TextIO | None = None, json: bool | None = None,
         Where lines go (stdout: journald captures it under systemd).
     json : bool, optional
         JSON lines (True) or console lines (False); default: JSON unless ``stream`` is a tty.
+        Colours only when ``stream`` is a tty.
     level : int
         Threshold of dsfd's own loggers.
     pymodbus_level : int
@@ -70,10 +74,11 @@ def configure_logging(*, stream: TextIO | None = None, json: bool | None = None,
     renderer: structlog.types.Processor
     tail: list[structlog.types.Processor] = []
     if json_mode:
-        tail.append(structlog.processors.dict_tracebacks)
+        tail += [_drop_console_only, structlog.processors.dict_tracebacks]
         renderer = structlog.processors.JSONRenderer()
     else:
-        renderer = structlog.dev.ConsoleRenderer(colors=_isatty(stream))
+        tail.append(structlog.processors.format_exc_info)
+        renderer = CycleConsoleRenderer(colors=_isatty(stream))
     handler = logging.StreamHandler(stream)
     handler.setFormatter(structlog.stdlib.ProcessorFormatter(
         foreign_pre_chain=shared,
@@ -85,6 +90,13 @@ def configure_logging(*, stream: TextIO | None = None, json: bool | None = None,
     root.addHandler(handler)
     root.setLevel(level)
     configure_pymodbus_logging(level=pymodbus_level)
+
+
+def _drop_console_only(_logger: Any, _name: str, event_dict: EventDict) -> EventDict:
+    """Keys meant for the console renderer only: the JSON lines stay as they were."""
+    for key in CONSOLE_ONLY:
+        event_dict.pop(key, None)
+    return event_dict
 
 
 def get_logger(name: str) -> structlog.stdlib.BoundLogger:

@@ -198,7 +198,8 @@ class _Daemon:
                  read_ms=t.get("read"), decide_ms=t.get("decide"), cycle_ms=t.get("total"),
                  skipped=out.skipped_slots or None,
                  hold=None if out.hold is None else out.hold.describe(),
-                 stored=None if out.store_ok else f"waiting ({self.store.buffer.waiting})")
+                 stored=None if out.store_ok else f"waiting ({self.store.buffer.waiting})",
+                 flagged_signals=tuple(out.quality.flags))  # console only (CONSOLE_ONLY)
         self.notifier.watchdog(f"cycle {out.cycle}: {out.method}, {position_text(c)}, "
                                f"write {out.write_status}")
 

@@ -12,8 +12,8 @@ request the daemon does not pick up within :data:`MAX_AGE_S` is rejected as expi
 command never takes effect long after it was given.
 
 No network listener of the daemon's own: who may write the database, or publish to the
-panel's ``<base>/cmd/`` topics on the broker (its ACL), may command the panel (README,
-"Operator commands", "Commands over MQTT").
+panel's ``<base>/cmd/`` topics on the broker (its ACL), may command the panel (docs/operating.md,
+"Permissions"; docs/mqtt.md, "Commands over MQTT").
 """
 
 from __future__ import annotations

@@ -73,8 +73,8 @@ class StateLock:
 def lock_holder(state_dir: Path) -> int | None:
     """PID of the process holding ``state_dir``'s lock, None if nobody holds it.
 
-    Raises ``PermissionError`` if the lock file cannot be opened for reading (see the README
-    on the permissions an operator needs)."""
+    Raises ``PermissionError`` if the lock file cannot be opened for reading (see
+    docs/operating.md on the permissions an operator needs)."""
     path = state_dir / LOCK_NAME
     try:
         fd = os.open(path, os.O_RDONLY | os.O_CLOEXEC)

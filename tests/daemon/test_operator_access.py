@@ -1,5 +1,5 @@
 """The operator commands as an operator runs them: another user than the daemon's, with the
-access the README describes for a group-shared state directory (the unit's static-user
+access docs/operating.md describes for a group-shared state directory (the unit's static-user
 drop-in: ``StateDirectoryMode=0770``, ``UMask=0007``, the operator in the daemon's group).
 
 The daemon runs as root here with the group-shared umask; ``dsfd status``/``override`` run

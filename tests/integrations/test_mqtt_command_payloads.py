@@ -1,7 +1,7 @@
 """MQTT command payloads as pure logic: topic + payload → the request ``dsfd override``/
 ``resume``/``mode`` would file, and the receiver's handling against a real database.
 
-The expected requests are written from the README's command table and Home Assistant's
+The expected requests are written from docs/mqtt.md's command table and Home Assistant's
 documented payloads (a select publishes the option's text, a number its value — an integer
 when whole —, a button its ``payload_press``), not from the code's output.
 """

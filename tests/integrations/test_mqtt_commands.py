@@ -205,7 +205,7 @@ def test_an_override_over_mqtt_holds_within_one_cycle_and_resume_ends_it(
 
 def malformed_lines(rng: random.Random) -> dict[str, list[bytes]]:
     """Per command subtopic, payloads none of which is a command (by construction: the
-    README's payload rules, not the code, say why each fails)."""
+    docs/mqtt.md's payload rules, not the code, say why each fails)."""
     def random_bytes() -> bytes:  # starts with a byte no UTF-8 text starts with
         body = bytes(b for b in rng.randbytes(rng.randint(1, 300)) if b not in b"\0\n")
         return bytes([rng.randint(0x80, 0xBF)]) + body

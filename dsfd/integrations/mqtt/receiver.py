@@ -21,7 +21,7 @@ with the topic, the reason and the payload cut to
 :data:`~dsfd.integrations.mqtt.commands.SHOWN_BYTES`) and logged with the same. A command the
 daemon rejects when it applies it (an override input is set, it expired) is answered there
 too, with its ``command_id``. Commands given while the daemon was not connected do not count:
-the session is clean, so the broker keeps nothing for it (README, "Commands over MQTT").
+the session is clean, so the broker keeps nothing for it (docs/mqtt.md, "Commands over MQTT").
 """
 
 from __future__ import annotations
