@@ -239,3 +239,33 @@ def test_stroke_refused_while_a_daemon_holds_the_state_directory(
                 assert await daemon.wait_exit() == 0, daemon.stderr
 
     asyncio.run(scenario())
+
+
+def test_stroke_stopped_by_wind_leaves_the_louver_at_its_safe_angle(
+        tmp_path: Path, station: StationEmulator) -> None:
+    weather = dict(NIGHT_STATION)
+
+    async def scenario() -> None:
+        async with rig(tmp_path, station) as r:
+            station.start_periodic(0.05, lambda: weather)
+            run = asyncio.create_task(commission(
+                r, r.panel, "--stroke", "--yes-move-actuators", "--settle-s", "0.5",
+                "--at", NIGHT_ISO))
+            async with asyncio.timeout(60):  # hang guard
+                while await r.io.value("phi_deg") != -54.0:
+                    await asyncio.sleep(0.005)
+            weather["wind_speed_ms"] = 22.0  # above safety.wind_limit_ms (15)
+            rc, out, err, doc = await run
+            assert rc == 1, out + err
+            moves = doc["stroke"]["moves"]
+            louver = [m["target"]["phi_deg"] for m in moves if m["stage"] == "louver"]
+            assert louver[:3] == [-90.0, -72.0, -54.0] and len(louver) < 11
+            assert moves[-1]["stage"] == "wind-safe" and moves[-1]["reached"]
+            assert "wind 22.0 m/s" in doc["stroke"]["stopped"]
+            assert doc["stroke"]["returned"] is False
+            assert [f["check"] for f in doc["findings"]] == ["wind"]
+            safe = {"phi_deg": 90.0, "afr": 10.0, "or_pct": 0.0}
+            assert await r.io.actuator_values() == safe
+            assert {k: await r.io.position(k) for k in safe} == safe
+
+    asyncio.run(scenario())
