@@ -58,6 +58,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="longest wait for one move's feedback (default 120)")
     p.add_argument("--settle-s", type=float, default=3.0,
                    help="a feedback unchanged this long has stopped moving (default 3)")
+    p.add_argument("--poll-s", type=float, default=0.1,
+                   help="feedback poll period, the resolution of the move times (default 0.1)")
     p.set_defaults(handler=run)
 
 
@@ -69,9 +71,10 @@ def _fail(message: str, code: int = EXIT_USAGE) -> int:
 def run(args: argparse.Namespace) -> int:
     if not args.signals and not args.stroke:
         args.signals = True
-    if args.reads < 1 or args.interval < 0 or args.damper_step_pct <= 0 or args.settle_s <= 0:
-        return _fail("--reads must be >= 1, --interval >= 0, --damper-step-pct and "
-                     "--settle-s > 0")
+    if (args.reads < 1 or args.interval < 0 or args.damper_step_pct <= 0
+            or args.settle_s <= 0 or args.poll_s <= 0):
+        return _fail("--reads must be >= 1, --interval >= 0, --damper-step-pct, --settle-s "
+                     "and --poll-s > 0")
     if args.stroke and not args.confirmed:
         return _fail(f"--stroke moves the louver and the dampers through their whole range: "
                      f"make sure nobody is at the panel and add {CONFIRM}")
@@ -129,7 +132,8 @@ async def _session(args: argparse.Namespace, cfg: PanelConfig, at_s: float) -> d
             _print_readout(readout)
         if args.stroke:
             opts = StrokeOptions(damper_step_pct=args.damper_step_pct,
-                                 move_timeout_s=args.move_timeout_s, settle_s=args.settle_s)
+                                 move_timeout_s=args.move_timeout_s, settle_s=args.settle_s,
+                                 poll_s=args.poll_s)
             print("stroke: move, target (phi_deg / afr / or_pct), feedback, time")
             stroke = await run_stroke(cfg, rig, opts, log=_print_move)
             _print_findings(stroke.findings, "stroke")

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 from dsfd.signals import SIGNALS
 
 __all__ = [
+    "DEEP_NIGHT_ELEVATION_DEG",
     "EXPECTED",
     "NIGHT_ELEVATION_DEG",
     "Conditions",
@@ -43,6 +44,11 @@ __all__ = [
 
 #: Sun elevation below which it is night for the checks [deg] (end of civil twilight).
 NIGHT_ELEVATION_DEG = -6.0
+#: ... and below which the panel has given up the day's stored heat, so the heat-path
+#: ordering holds [deg]: the stratified truth plant's closed cavity keeps the glass warmer
+#: than the room, and the exterior pane 7 K above outdoors, at -10 deg and still 1.3 K
+#: above the room at -21 deg (Suwon, January); -24 deg is about 2 h after sunset there.
+DEEP_NIGHT_ELEVATION_DEG = -24.0
 #: What a signal can show on a façade in service (tighter than the plausibility ranges of
 #: dsfd.signals for the room and the cavity anemometer) [signal unit].
 EXPECTED: Mapping[str, tuple[float, float]] = {
@@ -108,6 +114,8 @@ class Constraint:
     lo: str
     margin_k: float
     why: str
+    #: True: usual, not required (it only ranks the exchanges that repair the others).
+    soft: bool = False
 
     def holds(self, values: Mapping[str, float]) -> bool:
         return values[self.hi] >= values[self.lo] - self.margin_k
@@ -170,49 +178,61 @@ def order_constraints(values: Mapping[str, float], cond: Conditions) -> list[Con
     t_out, room = values.get("t_out_c"), values.get("t_room_c", cond.t_room_default_c)
     heating = t_out is not None and room is not None and room - t_out >= HEATING_DT_K
     out: list[Constraint] = []
-    if cond.night and t_out is not None:
+    deep = cond.sun_elevation_deg < DEEP_NIGHT_ELEVATION_DEG
+    if deep and t_out is not None:
         out += [Constraint("x1_c", "t_out_c", PANE_BELOW_OUT_K,
                            "at night the exterior pane sits near the outdoor air"),
                 Constraint("t_out_c", "x1_c", PANE_ABOVE_OUT_K,
                            "at night the exterior pane sits near the outdoor air")]
-    if cond.night and heating:
-        why = "on a heating night heat flows from the room out, through x3, x2, x4/x5, x1"
-        out += [Constraint(a, b, 0.5, why) for a, b in (
-            ("t_room_c", "x3_c"), ("x3_c", "x2_c"), ("x2_c", "x4_c"), ("x2_c", "x5_c"),
-            ("x4_c", "x1_c"), ("x5_c", "x1_c"))]
+    if deep and heating:
+        glass = "on a heating night heat flows from the room out through x3, x2, x1"
+        cavity = "on a heating night the cavity lies between the exterior pane and the room"
+        out += [Constraint("t_room_c", "x3_c", 1.5, glass),
+                Constraint("x3_c", "x2_c", 1.5, glass),
+                Constraint("x2_c", "x1_c", 1.5, glass)]
+        out += [Constraint(a, b, 1.5, cavity) for a, b in (
+            ("t_room_c", "x4_c"), ("t_room_c", "x5_c"), ("x4_c", "x1_c"), ("x5_c", "x1_c"))]
+        closed = "usually the cavity is colder than the interior pane (not with room air in it)"
+        out += [Constraint("x2_c", n, 1.0, closed, soft=True) for n in ("x4_c", "x5_c")]
     ghi = values.get("ghi_wm2")
     sunny = (cond.sun_elevation_deg >= SUN_ELEVATION_DEG and ghi is not None
              and ghi >= SUN_GHI_WM2)
     if sunny and heating:
-        out += [Constraint("x4_c", "x5_c", 1.0, "in winter sun the black louver heats the air"),
-                Constraint("x5_c", "x1_c", 1.0, "in winter sun the cavity air heats the "
-                           "exterior pane"),
-                Constraint("x3_c", "t_room_c", 1.0, "in winter sun the inner pane is not "
-                           "below the room")]
+        out += [Constraint("x4_c", "x5_c", 1.0, "in winter sun the black louver heats the "
+                           "cavity air"),
+                Constraint("x4_c", "x1_c", 1.0, "in winter sun the black louver is warmer "
+                           "than the exterior pane")]
     return [c for c in out if c.hi in values and c.lo in values]
 
 
 def check_order(values: Mapping[str, float], constraints: Sequence[Constraint],
                 where: Mapping[str, str]) -> list[Finding]:
-    """Broken orderings, and the two swapped thermocouples if one exchange repairs all."""
-    broken = [c for c in constraints if not c.holds(values)]
+    """Broken orderings, and the two swapped thermocouples if one exchange repairs all (the
+    usual, soft, orderings choose among several exchanges that repair the required ones)."""
+    hard = [c for c in constraints if not c.soft]
+    broken = [c for c in hard if not c.holds(values)]
     if not broken:
         return []
-    names = sorted({s for c in constraints for s in (c.hi, c.lo) if s in _THERMOCOUPLES})
-    repairs = []
+    names = sorted({s for c in hard for s in (c.hi, c.lo) if s in _THERMOCOUPLES})
+    repairs, usual = [], []
     for a, b in itertools.combinations(names, 2):
         swapped = {**values, a: values[b], b: values[a]}
-        if all(c.holds(swapped) for c in constraints):
+        if all(c.holds(swapped) for c in hard):
             repairs.append((a, b))
+            if all(c.holds(swapped) for c in constraints):
+                usual.append((a, b))
     text = "; ".join(f"{c.hi} {values[c.hi]:.4g} < {c.lo} {values[c.lo]:.4g}"
                      + (f" - {c.margin_k:g} K" if c.margin_k else "") + f" ({c.why})"
                      for c in broken)
-    if len(repairs) == 1:
-        a, b = repairs[0]
+    best = repairs if len(repairs) == 1 else usual
+    if len(best) == 1:
+        a, b = best[0]
+        others = [f"{x}/{y}" for x, y in repairs if (x, y) != (a, b)]
+        rest = f" (less likely: {', '.join(others)})" if others else ""
         return [Finding("swap", (a, b), f"ordering broken: {text}",
                         f"{a} and {b} swapped: {a} at {where.get(a, '?')} and {b} at "
                         f"{where.get(b, '?')}; exchanging their readings satisfies every "
-                        f"ordering")]
+                        f"ordering{rest}")]
     involved = tuple(sorted({s for c in broken for s in (c.hi, c.lo)}))
     hint = ("exchanging any one of " + ", ".join(f"{a}/{b}" for a, b in repairs)
             + " would repair it") if repairs else "no single exchange of two sensors repairs it"

@@ -46,14 +46,24 @@ def _f(value: Any, digits: int = 2) -> str:
     return escape(str(value))
 
 
-def _table(head: Sequence[str], rows: Sequence[tuple[Sequence[str], bool]], left: int) -> str:
-    th = "".join(f'<th class="l">{escape(h)}</th>' if i < left else f"<th>{escape(h)}</th>"
+def _table(head: Sequence[str], rows: Sequence[tuple[Sequence[str], bool]],
+           left: int | set[int]) -> str:
+    """A table; columns in ``left`` (or the first ``left``) are text, the others numbers;
+    rows marked True are highlighted."""
+    lefts = set(range(left)) if isinstance(left, int) else left
+    th = "".join(f'<th class="l">{escape(h)}</th>' if i in lefts else f"<th>{escape(h)}</th>"
                  for i, h in enumerate(head))
     body = "".join(
         f'<tr{" class=bad" if bad else ""}>'
-        + "".join(f'<td class="l">{c}</td>' if i < left else f"<td>{c}</td>"
+        + "".join(f'<td class="l">{c}</td>' if i in lefts else f"<td>{c}</td>"
                   for i, c in enumerate(cells)) + "</tr>" for cells, bad in rows)
     return f"<table><tr>{th}</tr>{body}</table>"
+
+
+def _position(cmd: Mapping[str, Any] | None) -> str:
+    if cmd is None:
+        return "unknown"
+    return f"louver {cmd['phi_deg']:g}°, regime {cmd['afr']:g}, dampers {cmd['or_pct']:g} %"
 
 
 def _signals(doc: Mapping[str, Any]) -> str:
@@ -75,7 +85,7 @@ def _signals(doc: Mapping[str, Any]) -> str:
                      rows, 2)
             + "<h3>Actuators (set-point and position feedback)</h3>"
             + _table(["actuator", "set-point register", "set-point", "feedback register",
-                      "feedback", "unit"], acts, 2))
+                      "feedback", "unit"], acts, {0, 1, 3}))
 
 
 def _stroke(doc: Mapping[str, Any]) -> str:
@@ -95,8 +105,8 @@ def _stroke(doc: Mapping[str, Any]) -> str:
              for i, m in enumerate(st["moves"], 1)]
     back = "yes" if st["returned"] else "NO"
     stopped = f' <b>Stopped: {escape(st["stopped"])}</b>.' if st["stopped"] else ""
-    return (f'<h2>Stroke</h2><p class="meta">Start {escape(str(st["start"]))}, end '
-            f'{escape(str(st["end"]))}; back at the start: {back}.{stopped} Time: from the '
+    return (f'<h2>Stroke</h2><p class="meta">Start: {escape(_position(st["start"]))}; end: '
+            f'{escape(_position(st["end"]))}; back at the start: {back}.{stopped} Time: from the '
             "write to the feedback within tolerance (without feedback: to the verified "
             "read-back).</p>"
             + _table(["actuator", "moves", "median s", "max s"], summary, 1)

@@ -181,7 +181,7 @@ def test_stroke_reaches_every_louver_step_and_regime_and_returns(
         async with rig(tmp_path, station) as r:
             rc, out, err, doc = await commission(
                 r, r.panel, "--stroke", "--yes-move-actuators", "--settle-s", "0.5",
-                "--at", NIGHT_ISO)
+                "--poll-s", "0.02", "--at", NIGHT_ISO)
             assert rc == 0, out + err
             moves = doc["stroke"]["moves"]
             assert all(m["verified"] and m["reached"] for m in moves), moves
