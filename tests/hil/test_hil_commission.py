@@ -17,6 +17,7 @@ from __future__ import annotations
 import asyncio
 import copy
 import json
+import re
 import signal
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
@@ -143,8 +144,11 @@ def test_signals_on_a_correct_panel_every_row_good(tmp_path: Path,
             assert {k: (a["set_point"], a["feedback"]) for k, a in acts.items()} == {
                 k: (v, v) for k, v in START.items()}
             assert "verdict: every signal and move checked out" in out
-            html = (r.state / "commissioning").glob("commission-*.html")
-            assert "Every signal and move checked out" in next(html).read_text()
+            (page,) = (r.state / "commissioning").glob("commission-*.html")
+            html = page.read_text()
+            assert "Every signal and move checked out" in html
+            # Self-contained: nothing to fetch, no script.
+            assert re.findall(r'(?:src|href)="', html) == [] and "<script" not in html
 
     asyncio.run(scenario())
 
