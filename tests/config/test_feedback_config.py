@@ -9,7 +9,8 @@ from typing import Any
 import pytest
 import yaml
 
-from dsfd.config import ConfigError, panel_from_mapping
+from dsfd.config import panel_from_mapping
+from tests.config.test_operator_config import errors
 from tests.conftest import PANELS
 
 
@@ -22,14 +23,6 @@ def with_feedback(base: dict[str, Any], **feedback: Any) -> dict[str, Any]:
     doc = copy.deepcopy(base)
     doc["devices"]["entries"][0]["actuators"][0]["feedback"] = feedback
     return doc
-
-
-def errors(doc: dict[str, Any]) -> list[str]:
-    try:
-        panel_from_mapping(doc)
-    except ConfigError as exc:
-        return [str(i) for i in exc.issues]
-    return []
 
 
 def test_a_feedback_register_loads_as_a_point_named_after_its_actuator(base) -> None:
