@@ -2,7 +2,8 @@
 
 Exit codes: 0 every signal and move checked out; 1 findings (or the record could not be
 written); 2 bad options or configuration, or ``--stroke`` without ``--yes-move-actuators``;
-3 ``--stroke`` while a daemon holds the state directory (as ``dsfd run``).
+3 a daemon holds the state directory (as ``dsfd run``): it owns the actuators and the
+serial lines.
 """
 
 from __future__ import annotations
@@ -33,9 +34,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Talk to the configured devices without running the controller. "
         "--signals (the default) reads every signal several times and checks plausibility "
         "(scale, swapped thermocouples, night irradiance, copied registers, louver sign); "
-        f"--stroke moves every actuator through its range and back (needs {CONFIRM}; refused "
-        "while a daemon holds the state directory). Writes a JSON and an HTML record into "
-        "<state dir>/commissioning/ (or --out). docs/commissioning.md.")
+        f"--stroke moves every actuator through its range and back (needs {CONFIRM}). Both "
+        "are refused while a daemon holds the state directory. Writes a JSON and an HTML "
+        "record into <state dir>/commissioning/ (or --out). docs/commissioning.md.")
     p.add_argument("--config", required=True, type=Path, metavar="PANEL", help="panel YAML")
     p.add_argument("--signals", action="store_true", help="read and check every signal")
     p.add_argument("--stroke", action="store_true",
@@ -92,17 +93,20 @@ def run(args: argparse.Namespace) -> int:
     from dsfd.cli.state_dir import state_dir_of
 
     state_dir = args.state_dir or state_dir_of(args.config, cfg)
-    lock = None
-    if args.stroke:
-        from dsfd.storage.lock import StateDirBusyError, StateLock
+    from dsfd.storage.lock import StateDirBusyError, StateLock, lock_holder
 
-        try:  # held for the whole session: no daemon can start while the actuators move
+    lock = None
+    try:
+        if args.stroke:  # held for the whole session: no daemon starts while things move
             lock = StateLock.acquire(state_dir)
-        except StateDirBusyError as exc:
-            return _fail(f"refusing to move the actuators: {exc}; nothing was opened",
-                         EXIT_BUSY)
-        except OSError as exc:
-            return _fail(f"state directory {state_dir}: {exc}")
+        elif (pid := lock_holder(state_dir)) is not None:
+            # A running daemon owns the serial lines: reading them would take its lines.
+            return _fail(f"a daemon (PID {pid}) controls this panel through {state_dir}: "
+                         "stop it first; nothing was opened", EXIT_BUSY)
+    except StateDirBusyError as exc:
+        return _fail(f"refusing to move the actuators: {exc}; nothing was opened", EXIT_BUSY)
+    except OSError as exc:
+        return _fail(f"state directory {state_dir}: {exc}")
     try:
         doc = asyncio.run(_session(args, cfg, at_s))
     finally:

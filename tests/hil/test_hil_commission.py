@@ -234,10 +234,13 @@ def test_stroke_refused_while_a_daemon_holds_the_state_directory(
                 assert "refusing to move the actuators" in err
                 assert daemon.proc is not None and f"PID {daemon.proc.pid}" in err
                 assert not (r.state / "commissioning").exists()
-                assert not untouched.contacted()
+                # Reading the signals is refused too: the daemon owns the serial lines.
+                rc, _, err, _ = await commission(r, panel, "--signals", "--at", NIGHT_ISO)
+                assert rc == 3 and f"PID {daemon.proc.pid}" in err
                 # Without the confirmation it is refused before anything else.
                 rc, _, err, _ = await commission(r, panel, "--stroke", "--at", NIGHT_ISO)
                 assert rc == 2 and "--yes-move-actuators" in err
+                assert not untouched.contacted()  # none of the three opened a device
             finally:
                 daemon.signal(signal.SIGTERM)
                 assert await daemon.wait_exit() == 0, daemon.stderr
