@@ -146,10 +146,7 @@ async def _actuator_rows(rig: Rig) -> list[ActuatorRow]:
 
 def findings(readout: Readout, panel: PanelConfig) -> list[Finding]:
     """Every finding of the read-out: bad quality first, then the checks."""
-    out = [Finding("quality", (r.signal,), f"{r.signal}: {r.good_reads} of {r.reads} reads "
-                   f"good, mostly {r.quality}" + (f": {r.detail}" if r.detail else ""),
-                   "see the detail: wiring, address, device id or port")
-           for r in readout.rows if not r.ok]
+    out = _quality_findings(readout)
     values = {r.signal: r.value for r in readout.rows if r.value is not None}
     points, _ = _linear(panel)
     scale_findings, mis_scaled = check_scales(values, {k: v[1] for k, v in points.items()})
@@ -159,15 +156,37 @@ def findings(readout: Readout, panel: PanelConfig) -> list[Finding]:
     where = {k: v[0] for k, v in points.items()}
     out += check_order(physical, order_constraints(physical, readout.conditions), where)
     out += check_duplicates({r.signal: r.values for r in readout.rows if r.ok}, where)
+    unread = [a for a in readout.actuators if a.set_point is None]
+    if unread:
+        out.append(Finding("quality", tuple(a.signal for a in unread), "set-point registers "
+                           "could not be read: " + ", ".join(f"{a.signal} ({a.source})"
+                                                              for a in unread),
+                           "wiring, address or device id"))
     for a in readout.actuators:
         if a.set_point is None:
-            out.append(Finding("quality", (a.signal,), f"{a.signal}: set-point register "
-                               f"{a.source} could not be read", "wiring, address or device id"))
-        elif a.feedback_source and a.feedback is None:
+            continue
+        if a.feedback_source and a.feedback is None:
             out.append(Finding("quality", (a.signal,), f"{a.signal}: feedback "
                                f"{a.feedback_source} could not be read", "address or table"))
         elif a.feedback is not None:
             found = check_feedback(a.signal, a.set_point, a.feedback, a.feedback_source)
             if found is not None:
                 out.append(found)
+    return out
+
+
+def _quality_findings(readout: Readout) -> list[Finding]:
+    """One finding per device and flag (a dead device is one finding, not one per signal)."""
+    groups: dict[tuple[str, str], list[SignalRow]] = defaultdict(list)
+    for r in readout.rows:
+        if not r.ok:
+            groups[(r.source.split()[0], r.quality)].append(r)
+    out = []
+    for (device, quality), rows in groups.items():
+        counts = ", ".join(f"{r.signal} {r.good_reads}/{r.reads}" for r in rows)
+        detail = next((r.detail for r in rows if r.detail), "")
+        out.append(Finding("quality", tuple(r.signal for r in rows),
+                           f"{device}: {quality} (good reads: {counts})"
+                           + (f"; {detail}" if detail else ""),
+                           "see the detail: wiring, address, device id or port"))
     return out

@@ -276,3 +276,24 @@ def test_stroke_stopped_by_wind_leaves_the_louver_at_its_safe_angle(
             assert {k: await r.io.position(k) for k in safe} == safe
 
     asyncio.run(scenario())
+
+
+def test_signals_flag_a_register_the_device_does_not_have(tmp_path: Path,
+                                                          station: StationEmulator) -> None:
+    async def scenario() -> None:
+        async with rig(tmp_path, station) as r:
+            doc = copy.deepcopy(r.doc)
+            (v_cav,) = [s for s in doc["devices"]["entries"][0]["sensors"]
+                        if s["signal"] == "v_cav_ms"]
+            v_cav["address"] = 40  # the emulated module answers ILLEGAL_ADDRESS there
+            rc, out, err, rec = await commission(r, save(tmp_path / "p.yaml", doc),
+                                                 "--signals", *FAST_OPTIONS)
+            assert rc == 1, out + err
+            (f,) = rec["findings"]
+            assert f["check"] == "quality" and f["signals"] == ["v_cav_ms"]
+            assert "device_error" in f["message"] and "ILLEGAL_ADDRESS" in f["message"]
+            assert "input register 40" in f["message"]
+            bad = [row["signal"] for row in rec["signals"]["rows"] if row["quality"] != "good"]
+            assert bad == ["v_cav_ms"]
+
+    asyncio.run(scenario())
