@@ -67,6 +67,20 @@ def test_unrepairable_orderings_are_not_blamed_on_one_pair() -> None:
     assert check_order(values, order_constraints(values, NIGHT), WHERE) == []
 
 
+def test_in_winter_sun_a_louver_swapped_with_the_exterior_pane_is_named() -> None:
+    # Clear winter noon: the black louver absorbs most of the sun and heats the cavity air.
+    sun = Conditions(30.0, 22.0)
+    noon = {"x1_c": 9.0, "x2_c": 24.0, "x3_c": 23.0, "x4_c": 38.0, "x5_c": 27.0,
+            "t_room_c": 21.5, "t_out_c": 0.5, "ghi_wm2": 520.0}
+    assert check_order(noon, order_constraints(noon, sun), WHERE) == []
+    swapped = {**noon, "x1_c": noon["x4_c"], "x4_c": noon["x1_c"]}
+    (f,) = check_order(swapped, order_constraints(swapped, sun), WHERE)
+    assert f.check == "swap" and set(f.signals) == {"x1_c", "x4_c"}, f
+    # Overcast (little irradiance): no sun ordering is claimed.
+    dull = {**swapped, "ghi_wm2": 80.0}
+    assert order_constraints(dull, sun) == []
+
+
 def test_irradiance_at_night_and_daytime_are_told_apart() -> None:
     (f,) = check_night({"ghi_wm2": 450.0}, NIGHT)
     assert f.signals == ("ghi_wm2",)
