@@ -105,7 +105,7 @@ async def read_signals(panel: PanelConfig, rig: Rig, conditions: Conditions, *, 
     qualities: dict[str, Counter[str]] = defaultdict(Counter)
     details: dict[str, str] = {}
     latency: dict[str, list[float]] = defaultdict(list)
-    for i in range(reads):
+    for _ in range(reads):
         await asyncio.sleep(interval_s)
         for timed in await rig.read_timed():
             for name, r in timed.sample.readings.items():
@@ -114,7 +114,6 @@ async def read_signals(panel: PanelConfig, rig: Rig, conditions: Conditions, *, 
                 latency[name].append(timed.latency_s)
                 if not r.ok:
                     details[name] = r.detail
-        del i
     points, station = _linear(panel)
     rows = []
     for name in (n for n in SIGNALS if n in values):
