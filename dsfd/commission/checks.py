@@ -35,6 +35,7 @@ __all__ = [
     "Finding",
     "check_duplicates",
     "check_feedback",
+    "check_louver_range",
     "check_night",
     "check_order",
     "check_scales",
@@ -278,3 +279,18 @@ def check_feedback(name: str, set_point: float, feedback: float, where: str) -> 
             return Finding("scale", (name,), msg, f"wrong scale: the feedback is x{f:g} the "
                            "set-point; one of the two scales is off by that factor")
     return Finding("feedback", (name,), msg, "still moving, stalled, or the wrong register")
+
+
+def check_louver_range(angle_deg: float, lo_deg: float, hi_deg: float, where: str
+                       ) -> Finding | None:
+    """The louver read outside its mechanical range ``safety.phi_min_deg..phi_max_deg``
+    (None: inside). A mirror angle inside the range points at an inverted sign."""
+    if lo_deg - 0.5 <= angle_deg <= hi_deg + 0.5:
+        return None
+    msg = (f"phi_deg reads {angle_deg:.4g} deg ({where}), outside the mechanical range "
+           f"{lo_deg:g}..{hi_deg:g} deg (safety.phi_min_deg, phi_max_deg)")
+    if lo_deg - 0.5 <= -angle_deg <= hi_deg + 0.5:
+        return Finding("sign", ("phi_deg",), msg, f"inverted sign: the mirror angle "
+                       f"{-angle_deg:.4g} deg is inside the range; check the scale's sign")
+    return Finding("range", ("phi_deg",), msg, "a wrong scale or offset, or the range in the "
+                   "safety section is wrong")

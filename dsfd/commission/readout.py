@@ -15,6 +15,7 @@ from dsfd.commission.checks import (
     Finding,
     check_duplicates,
     check_feedback,
+    check_louver_range,
     check_night,
     check_order,
     check_scales,
@@ -161,9 +162,16 @@ def findings(readout: Readout, panel: PanelConfig) -> list[Finding]:
                            "could not be read: " + ", ".join(f"{a.signal} ({a.source})"
                                                               for a in unread),
                            "wiring, address or device id"))
+    safety = panel.safety
     for a in readout.actuators:
         if a.set_point is None:
             continue
+        if a.signal == "phi_deg":
+            for value, where in ((a.set_point, a.source), (a.feedback, a.feedback_source)):
+                found = None if value is None else check_louver_range(
+                    value, safety.phi_min_deg, safety.phi_max_deg, where)
+                if found is not None:
+                    out.append(found)
         if a.feedback_source and a.feedback is None:
             out.append(Finding("quality", (a.signal,), f"{a.signal}: feedback "
                                f"{a.feedback_source} could not be read", "address or table"))

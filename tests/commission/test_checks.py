@@ -15,6 +15,7 @@ from dsfd.commission.checks import (
     Conditions,
     check_duplicates,
     check_feedback,
+    check_louver_range,
     check_night,
     check_order,
     check_scales,
@@ -127,3 +128,12 @@ def test_the_orderings_hold_on_the_truth_plant(command: dict[str, float]) -> Non
         checked["night"] += "x3_c" in names
         checked["sun"] += "x4_c" in names and not cond.night
     assert checked["night"] >= 20 and checked["sun"] >= 10, checked  # both were exercised
+
+
+def test_a_louver_outside_its_mechanical_range_at_the_mirror_angle_is_an_inverted_sign(
+) -> None:
+    # A louver that only tilts one way (0..90 deg) read at -36 deg: its mirror fits.
+    assert check_louver_range(-36.0, 0.0, 90.0, "io holding 100").check == "sign"
+    assert check_louver_range(36.0, 0.0, 90.0, "io holding 100") is None
+    assert check_louver_range(-36.0, -90.0, 90.0, "io holding 100") is None
+    assert check_louver_range(-72.0, -30.0, 60.0, "io holding 100").check == "range"
