@@ -19,6 +19,11 @@ map the driver decodes with. Faults:
 * ``short_reads = True`` — register reads are answered with one register fewer than asked
   (a device with a wrong register map).
 
+Motors: an actuator with a position feedback register (``feedback_points``) is driven by a
+motor model while the server runs: the feedback follows the set-point register at
+``motor_rates`` [signal unit/s] (a regime switches when its travel time has passed); without
+a rate the feedback follows at once.
+
 A person at the panel: :meth:`move_actuators` changes the actuator registers the way a
 motor controller's local buttons would (not through a client request, so not counted in
 ``writes``); :meth:`set_override_input` flips the panel's hand/auto input (a coil, discrete
@@ -46,6 +51,7 @@ from pymodbus.server import ModbusSerialServer, ModbusTcpServer
 from pymodbus.simulator import DataType, SimData, SimDevice
 
 from dsfd.registers import RegisterPoint, decode, encode, from_pattern
+from dsfd.signals import ACTUATORS
 
 if TYPE_CHECKING:
     from dsfd.config.devices import DeviceConfig, OverrideInput
@@ -55,6 +61,9 @@ __all__ = ["EmulatedModbusDevice"]
 log = logging.getLogger(__name__)
 _FC_READ = {"input": 4, "holding": 3, "coil": 1, "discrete_input": 2}
 _OVERRIDE = "override_input"
+_FEEDBACK = "feedback:"
+#: Motor model time step [s].
+_MOTOR_TICK_S = 0.005
 _FC_WRITES = (6, 16)
 
 
@@ -63,9 +72,17 @@ class EmulatedModbusDevice:
 
     def __init__(self, *, sensors: Sequence[RegisterPoint],
                  actuators: Sequence[RegisterPoint] = (), device_id: int = 1,
-                 fill_gaps: bool = False, override_input: OverrideInput | None = None) -> None:
+                 fill_gaps: bool = False, override_input: OverrideInput | None = None,
+                 feedback_points: Sequence[RegisterPoint] = (),
+                 motor_rates: Mapping[str, float] | None = None) -> None:
         self.device_id = device_id
         self.points: dict[str, RegisterPoint] = {p.name: p for p in (*sensors, *actuators)}
+        #: Position feedback of the actuators, by actuator name (motor model, docstring).
+        self.feedback = {p.name: p for p in feedback_points}
+        for p in feedback_points:
+            self.points[_FEEDBACK + p.name] = p
+        self.motor_rates = dict(motor_rates or {})
+        self._motor: asyncio.Task[None] | None = None
         self.actuators = tuple(actuators)
         self.fill_gaps = fill_gaps
         self.override_input = override_input
@@ -87,11 +104,13 @@ class EmulatedModbusDevice:
         self.device = SimDevice(id=device_id, simdata=self._tables(), action=self._action)
 
     @classmethod
-    def from_config(cls, cfg: DeviceConfig, *, fill_gaps: bool = False) -> EmulatedModbusDevice:
+    def from_config(cls, cfg: DeviceConfig, *, fill_gaps: bool = False,
+                    motor_rates: Mapping[str, float] | None = None) -> EmulatedModbusDevice:
         """Emulator of a configured ``modbus_tcp``/``modbus_rtu`` device."""
         return cls(sensors=cfg.sensor_points(), actuators=cfg.actuator_points(),
                    device_id=cfg.device_id, fill_gaps=fill_gaps,
-                   override_input=cfg.override_input)
+                   override_input=cfg.override_input, feedback_points=cfg.feedback_points(),
+                   motor_rates=motor_rates)
 
     def _tables(self) -> tuple[list[SimData], list[SimData], list[SimData], list[SimData]]:
         # SimDevice rejects empty blocks; one invalid register keeps an unused table empty.
@@ -152,6 +171,11 @@ class EmulatedModbusDevice:
 
     async def stop(self) -> None:
         """Device down: close the listener and every client connection."""
+        if self._motor is not None:
+            self._motor.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._motor
+            self._motor = None
         if self._server is not None and self._running:
             await self._server.shutdown()
             self._running = False
@@ -163,6 +187,37 @@ class EmulatedModbusDevice:
         if not self._running:
             await self._server.serve_forever(background=True)
             self._running = True
+        if self.feedback and self._motor is None:
+            self._motor = asyncio.create_task(self._run_motors())
+
+    async def _run_motors(self) -> None:
+        """Move each feedback toward its set-point at its rate (module docstring)."""
+        clock = asyncio.get_running_loop().time
+        moving: dict[str, tuple[float, float, float]] = {}  # name -> (from, to, start time)
+        while True:
+            for name in self.feedback:
+                target = await self.value(name)
+                position = await self.value(_FEEDBACK + name)
+                start = moving.get(name)
+                if start is None or start[1] != target:
+                    if position == target:
+                        moving.pop(name, None)
+                        continue
+                    start = moving[name] = (position, target, clock())
+                await self.set_sensor(_FEEDBACK + name, _travel(
+                    start, clock(), self.motor_rates.get(name), stepwise=_stepwise(name)))
+                if await self.value(_FEEDBACK + name) == target:
+                    moving.pop(name, None)
+            await asyncio.sleep(_MOTOR_TICK_S)
+
+    async def position(self, name: str) -> float:
+        """The position actuator ``name``'s feedback register reports [signal unit]."""
+        return await self.value(_FEEDBACK + name)
+
+    async def set_position(self, name: str, value: float) -> None:
+        """Put actuator ``name``'s motor at ``value`` (feedback and set-point registers)."""
+        await self.set_sensor(name, value)
+        await self.set_sensor(_FEEDBACK + name, value)
 
     # ----------------------------------------------------------------------- fault hooks
     async def _action(self, function_code: int, start_address: int, address: int, count: int,
@@ -270,6 +325,27 @@ class EmulatedModbusDevice:
         if self._server is None:
             raise RuntimeError("call start_tcp() or start_rtu() first")
         return self._server
+
+
+def _stepwise(name: str) -> bool:
+    """True for an actuator of whole numbers (the regime): it switches, it does not glide."""
+    return name in ACTUATORS and ACTUATORS[name].integer
+
+
+def _travel(move: tuple[float, float, float], now: float, rate: float | None, *,
+            stepwise: bool) -> float:
+    """Position of a motor moving from ``move[0]`` to ``move[1]`` since ``move[2]`` at
+    ``rate`` [unit/s]; a ``stepwise`` one switches on arrival."""
+    start, target, t0 = move
+    if rate is None or rate <= 0:
+        return target
+    span = target - start
+    done = min(1.0, (now - t0) * rate / abs(span))
+    if done >= 1.0:
+        return target
+    if stepwise:
+        return start  # a damper set: the regime changes when the dampers have travelled
+    return start + done * span
 
 
 _DEMO_VALUES = {

@@ -15,7 +15,7 @@ from dsfd import __version__
 
 #: Command modules, in the order they appear in ``dsfd --help``.
 COMMANDS = ("check_config", "simulate", "run", "operator", "status", "fleet", "report",
-            "export", "bench", "calibrate", "validate", "convert_aalborg")
+            "export", "commission", "bench", "calibrate", "validate", "convert_aalborg")
 
 EXIT_OK = 0
 EXIT_FAILURE = 1

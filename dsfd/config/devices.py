@@ -50,6 +50,7 @@ __all__ = [
     "ActuatorPoint",
     "DeviceConfig",
     "Devices",
+    "FeedbackPoint",
     "OverrideInput",
     "SensorPoint",
     "SerialLine",
@@ -134,10 +135,43 @@ class SensorPoint(_Register):
 
 
 @dataclass(frozen=True, kw_only=True)
+class FeedbackPoint:
+    """Where an actuator reports the position it has reached (a motor controller's "actual
+    position", distinct from its set-point). Read by ``dsfd commission``; the daemon verifies
+    the set-point register."""
+
+    table: Literal["input", "holding"] = setting("input", doc="Register table")
+    address: int = setting(doc="First register, 0-based protocol address", ge=0, le=65535)
+    data_type: Literal["int16", "uint16", "int32", "uint32", "float32"] = setting(
+        "int16", doc="Raw type on the device")
+    word_order: Literal["big", "little"] = setting("big", doc="Register order of 32-bit values")
+    byte_order: Literal["big", "little"] = setting("big", doc="Byte order inside each register")
+    scale: float = setting(1.0, doc="Position = raw · scale + offset, in the actuator's unit")
+    offset: float = setting(0.0, doc="Position = raw · scale + offset, in the actuator's unit")
+
+    def check(self) -> list[Problem]:
+        out = []
+        if self.scale == 0.0:
+            out.append(Problem("scale", self.scale, "must not be zero"))
+        if self.address + register_count(self.data_type) - 1 > 0xFFFF:
+            out.append(Problem("address", self.address, "registers beyond 65535"))
+        return out
+
+    def point(self, signal: str) -> RegisterPoint:
+        """The register-map entry of the feedback of actuator ``signal``."""
+        return RegisterPoint(name=signal, address=self.address, table=self.table,
+                             data_type=self.data_type, word_order=self.word_order,
+                             byte_order=self.byte_order, scale=self.scale, offset=self.offset)
+
+
+@dataclass(frozen=True, kw_only=True)
 class ActuatorPoint(_Register):
     signal: str = setting(doc="Commanded signal (dsfd.signals), unit in the name",
                           choices=tuple(ACTUATORS))
     table: Literal["holding"] = setting("holding", doc="Actuators live in holding registers")
+    feedback: FeedbackPoint | None = setting(
+        None, doc="Optional position feedback register (the position reached, as the motor "
+        "controller reports it); dsfd commission checks it against the set-point")
 
     def check(self) -> list[Problem]:
         if self.signal not in ACTUATORS:
@@ -206,6 +240,11 @@ class DeviceConfig:
 
     def actuator_points(self) -> tuple[RegisterPoint, ...]:
         return tuple(a.point() for a in self.actuators)
+
+    def feedback_points(self) -> tuple[RegisterPoint, ...]:
+        """Position feedback registers, named after their actuators."""
+        return tuple(a.feedback.point(a.signal) for a in self.actuators
+                     if a.feedback is not None)
 
     def signal_names(self) -> tuple[str, ...]:
         """Sensor signals this device delivers (the station's are fixed by its protocol)."""
@@ -297,6 +336,11 @@ class DeviceConfig:
                 p = entry.point()
                 where[id(p)] = f"{key}[{i}]"
                 points.append(p)
+                fb = getattr(entry, "feedback", None)
+                if fb is not None:
+                    q = fb.point(entry.signal)
+                    where[id(q)] = f"{key}[{i}].feedback"
+                    points.append(q)
         return [Problem(f"{where[id(b)]}.address", b.address,
                         f"{b.table} registers {b.address}..{b.end - 1} overlap "
                         f"{where[id(a)]} ({a.address}..{a.end - 1})")

@@ -44,6 +44,8 @@ class Report:
     notes: tuple[str, ...]
     made_utc: str
     version: str
+    #: The newest ``dsfd commission`` page in the state directory, if any.
+    commissioning: Path | None = None
 
 
 def _config(history: History, panel: PanelConfig | None) -> tuple[Mapping[str, Any] | None,
@@ -78,8 +80,10 @@ def build_report(history: History, *, panel: PanelConfig | None = None, dpi: int
     errors = prediction_errors(history, report_step_s(history, config))
     kpis = compute_kpis(history, config, errors)
     figures = draw_figures(history, kpis, errors, config, dpi=dpi)
+    from dsfd.commission.record import latest_record
+
     return Report(history, config, kpis, figures, (*history.notes, *notes), iso_now(),
-                  __version__)
+                  __version__, latest_record(history.path.parent))
 
 
 def render_html(report: Report) -> str:

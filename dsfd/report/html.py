@@ -167,6 +167,15 @@ def _runs(report: Report) -> str:
                    "cycles shown", "first cycle (UTC)", "last cycle (UTC)"], rows, left=5)
 
 
+def _commissioning(report: Report) -> str:
+    """A link to the newest commissioning record (``dsfd commission``), if there is one."""
+    page = report.commissioning
+    if page is None:
+        return ""
+    return (f'<p class="meta">Latest commissioning record: <a href="{page.resolve().as_uri()}">'
+            f"{escape(page.name)}</a></p>")
+
+
 def render_html(report: Report) -> str:
     """The whole page."""
     h, k = report.history, report.kpis
@@ -190,7 +199,7 @@ def render_html(report: Report) -> str:
 figures in local standard time {zone_name(k.utc_offset_h)}). State directory
 <code>{escape(str(h.path.parent))}</code>; report made {escape(report.made_utc)} by dsfd
 {escape(report.version)}.</p>
-{notes}
+{notes}{_commissioning(report)}
 <nav><ul><li><a href="#kpis">Key figures</a></li>{nav}</ul></nav>
 <h2 id="kpis">Key figures</h2>
 <h3>Operation per day</h3>{_operation(report)}
