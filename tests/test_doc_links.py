@@ -10,9 +10,6 @@ from tests.conftest import ROOT
 
 LINK = re.compile(r"\]\(([^)\s]+)\)")
 HEADING = re.compile(r"^#{1,6} (.+?)\s*$", re.MULTILINE)
-#: Pages another branch of issue 39 writes (``dsfd commission``); linked from the README's
-#: tour ahead of the merge. Empty once that branch is in.
-PENDING = {"docs/commissioning.md"}
 
 
 def anchor(heading: str) -> str:
@@ -36,8 +33,6 @@ def test_every_relative_link_and_anchor_resolves():
                 continue  # http(s), mailto
             file, _, fragment = target.partition("#")
             dest = (path.parent / file).resolve() if file else path
-            if str(dest.relative_to(ROOT)) in PENDING and not dest.exists():
-                continue
             if not dest.exists():
                 broken.append(f"{path.name}: {target}: no such file")
             elif fragment and dest.suffix == ".md" and fragment not in anchors(

@@ -146,8 +146,9 @@ class FeedbackPoint:
         "int16", doc="Raw type on the device")
     word_order: Literal["big", "little"] = setting("big", doc="Register order of 32-bit values")
     byte_order: Literal["big", "little"] = setting("big", doc="Byte order inside each register")
-    scale: float = setting(1.0, doc="Position = raw · scale + offset, in the actuator's unit")
-    offset: float = setting(0.0, doc="Position = raw · scale + offset, in the actuator's unit")
+    scale: float = setting(1.0, doc="Position = raw · scale + offset",
+                           unit="actuator unit per raw count")
+    offset: float = setting(0.0, doc="Position = raw · scale + offset", unit="actuator unit")
 
     def check(self) -> list[Problem]:
         out = []

@@ -114,10 +114,13 @@ def test_every_key_has_a_description_and_every_number_a_unit():
 
 
 def _full_panel() -> dict:
-    """suwon-south with every optional section present (MQTT with TLS, an override input)."""
+    """suwon-south with every optional section present (MQTT with TLS, an override input, a
+    louver position feedback register)."""
     data = yaml.safe_load((PANELS / "suwon-south.yaml").read_text(encoding="utf-8"))
     data["mqtt"] = {"host": "broker.example", "tls": {}}
     data["devices"]["entries"][0]["override_input"] = {"table": "coil", "address": 3}
+    for actuator in data["devices"]["entries"][0]["actuators"]:
+        actuator["feedback"] = {"address": 200 + actuator["address"]}
     panel_from_mapping(data)  # valid as it stands
     return data
 
