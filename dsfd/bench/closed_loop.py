@@ -36,6 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dsfd.bench.oracle_cache import OracleCache, config_digest
 from dsfd.config.panel import PanelConfig
 from dsfd.physics.solar import extraterrestrial_irradiance, solar_position
 from dsfd.sim.choices import BENCH_CONTROLLERS
@@ -48,7 +49,8 @@ from dsfd.sim.closed_loop import (
 from dsfd.sim.replay import at_site
 from dsfd.weather import WeatherSeries
 
-__all__ = ["CASES", "CONTROLLERS", "DayClass", "bench_closed_loop", "classify_days", "report"]
+__all__ = ["CASES", "CONTROLLERS", "DayClass", "bench_closed_loop", "bench_closed_loop_seeds",
+           "classify_days", "report", "share_table"]
 
 CONTROLLERS = BENCH_CONTROLLERS
 SKIES = ("clear", "mixed", "overcast")
@@ -145,13 +147,15 @@ def bench_closed_loop(cfg: PanelConfig, series: WeatherSeries, *, days: float = 
                       controllers: Sequence[str] = CONTROLLERS, warmup_h: float = WARMUP_H,
                       progress: Callable[[str], None] | None = None,
                       on_figures: Callable[[dict[str, float]], None] | None = None,
-                      ) -> dict[str, float]:
+                      oracle_cache: OracleCache | None = None) -> dict[str, float]:
     """Run every controller on every case; flat figures ``<case>.<controller>.<figure>``
     and ``<case>.mpc_share_of_plant_oracle_saving`` (and the other shares) when ``rule`` and
     ``plant-oracle`` are among ``controllers`` (a run of some controllers alone, e.g. to add
     the split to an earlier run on the same seed, has no shares). ``on_figures`` receives a
     copy of the figures so far after every controller's run (a plant-oracle day takes about
-    an hour: the CLI saves them, so a stopped bench keeps what it finished)."""
+    an hour: the CLI saves them, so a stopped bench keeps what it finished). With
+    ``oracle_cache`` the plant oracle's figures of a case are taken from it where it has them
+    (``<case>.plant-oracle.cached`` = 1) and stored in it where it does not."""
     unknown = sorted(set(cases) - set(CASES))
     if unknown:
         raise ValueError(f"unknown case(s) {unknown}; choose from {', '.join(CASES)}")
@@ -171,11 +175,22 @@ def bench_closed_loop(cfg: PanelConfig, series: WeatherSeries, *, days: float = 
         fig[f"{case}.day_start_s"] = day.start_s
         fig[f"{case}.warmup_h"] = (day.start_s - start) / 3600.0
         j: dict[str, float] = {}
+        oracle_key = OracleCache.key(case=case, seed=seed, days=days, warmup_h=warmup_h,
+                              weather=series.source, digest=config_digest(ccfg))
         for name in controllers:
             wall = time.perf_counter()
-            res = run_closed_loop(ccfg, cseries, ClosedLoopSettings(
-                controller=name, calibration="online", seed=seed, hours=hours, start_s=start))
-            scored = _scored(res, day.start_s)
+            cached = (oracle_cache.get(oracle_key) if oracle_cache is not None
+                      and name == "plant-oracle" else None)
+            if cached is None:
+                res = run_closed_loop(ccfg, cseries, ClosedLoopSettings(
+                    controller=name, calibration="online", seed=seed, hours=hours,
+                    start_s=start))
+                scored = _scored(res, day.start_s)
+                if oracle_cache is not None and name == "plant-oracle":
+                    oracle_cache.put(oracle_key, scored)
+            else:
+                scored = cached
+                fig[f"{case}.{name}.cached"] = 1.0
             for key, value in scored.items():
                 fig[f"{case}.{name}.{key}"] = value
             fig[f"{case}.{name}.wall_s"] = time.perf_counter() - wall
@@ -216,3 +231,38 @@ def report(fig: dict[str, float]) -> str:
                          + (f"{share:8.1%}" if share is not None else f"{'':>8}"))
     return "\n".join(lines)
 
+
+
+def bench_closed_loop_seeds(cfg: PanelConfig, series: WeatherSeries, *, seeds: Sequence[int],
+                            on_figures: Callable[[dict[str, float]], None] | None = None,
+                            **options) -> dict[str, float]:
+    """:func:`bench_closed_loop` for each seed, figures prefixed ``seed<S>.``; ``options`` as
+    there. ``on_figures`` receives all seeds' figures so far after every controller's run."""
+    fig: dict[str, float] = {"seeds": float(len(seeds))}
+    for seed in seeds:
+        done = dict(fig)
+
+        def hand_over(part: dict[str, float], done=done, seed=seed) -> None:
+            if on_figures is not None:
+                on_figures({**done, **{f"seed{seed}.{k}": v for k, v in part.items()}})
+
+        part = bench_closed_loop(cfg, series, seed=seed, on_figures=hand_over, **options)
+        fig.update({f"seed{seed}.{k}": v for k, v in part.items()})
+    return fig
+
+
+def share_table(fig: dict[str, float]) -> str:
+    """mpc's share of the plant oracle's saving per case (rows) and seed (columns), text."""
+    seeds = sorted({int(k.split(".")[0][4:]) for k in fig if k.startswith("seed")
+                    and k.split(".")[0][4:].isdigit()})
+    cases = [c for c in CASES if any(f"seed{s}.{c}.day_start_s" in fig for s in seeds)]
+    lines = ["mpc share of the plant oracle's saving over the rule (J_rule - J_mpc) / "
+             "(J_rule - J_plant-oracle)",
+             f"{'case':<18}" + "".join(f"{f'seed {s}':>10}" for s in seeds) + f"{'mean':>10}"]
+    for case in cases:
+        shares = [fig.get(f"seed{s}.{case}.mpc_share_of_plant_oracle_saving") for s in seeds]
+        known = [v for v in shares if v is not None and np.isfinite(v)]
+        cells = "".join(f"{v:10.1%}" if v is not None else f"{'-':>10}" for v in shares)
+        mean = f"{np.mean(known):10.1%}" if known else f"{'-':>10}"
+        lines.append(f"{case:<18}{cells}{mean}")
+    return "\n".join(lines)

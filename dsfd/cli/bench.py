@@ -101,19 +101,35 @@ def _bench_paper_tables(args: argparse.Namespace) -> dict[str, float]:
 
 
 def _bench_closed_loop(args: argparse.Namespace) -> dict[str, float]:
-    from dsfd.bench.closed_loop import CASES, CONTROLLERS, bench_closed_loop, report
+    from dsfd.bench.closed_loop import (
+        CASES,
+        CONTROLLERS,
+        bench_closed_loop,
+        bench_closed_loop_seeds,
+        report,
+        share_table,
+    )
+    from dsfd.bench.oracle_cache import OracleCache
     from dsfd.sim.replay import load_weather
 
     controllers = CONTROLLERS if args.controllers is None else tuple(
         c.strip() for c in args.controllers.split(",") if c.strip())
-    figures = bench_closed_loop(
-        load_panel(args.config), load_weather(args.weather or "rmis-golden-2022-01"),
-        days=1.0 if args.days is None else args.days, seed=args.seed,
+    options = dict(
+        days=1.0 if args.days is None else args.days,
         cases=tuple(args.case) if args.case else CASES, controllers=controllers,
         progress=lambda msg: print(msg, file=sys.stderr, flush=True),
         on_figures=None if args.json is None else lambda fig: _write_json(
-            args.json, args.target, {**fig, "partial": 1.0}))
-    print(report(figures))
+            args.json, args.target, {**fig, "partial": 1.0}),
+        oracle_cache=None if args.oracle_cache is None else OracleCache(args.oracle_cache))
+    cfg = load_panel(args.config)
+    series = load_weather(args.weather or "rmis-golden-2022-01")
+    if args.seeds is None:
+        figures = bench_closed_loop(cfg, series, seed=args.seed, **options)
+        print(report(figures))
+    else:
+        seeds = range(args.seeds) if isinstance(args.seeds, int) else args.seeds
+        figures = bench_closed_loop_seeds(cfg, series, seeds=tuple(seeds), **options)
+        print(share_table(figures))
     print()
     return figures
 
@@ -148,10 +164,15 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=int, default=0, help="seed of the target's randomness")
     p.add_argument("--cases", type=int, default=200,
                    help="control: random decision problems judged against brute force")
-    p.add_argument("--seeds", type=int, default=None,
+    p.add_argument("--seeds", type=_seeds, default=None,
                    help="plant-velocity: seeded draws of the plant's true parameters (default "
                    "10); paper-tables: run seeds 0..N-1 and print the per-seed cavity-speed "
-                   "table")
+                   "table; closed-loop: N (seeds 0..N-1) or a list such as 1,2,3, and print "
+                   "the share per case and seed")
+    p.add_argument("--oracle-cache", type=Path, default=None, metavar="FILE",
+                   help="closed-loop: take the plant oracle's figures from FILE where it has "
+                   "them for the case, seed, days, weather and panel, and store new ones there "
+                   "(dsfd.bench.oracle_cache)")
     p.add_argument("--cycles", type=int, default=None,
                    help="mqtt: daemon cycles whose publish latency is measured (default 200)")
     p.add_argument("--backlog", type=int, default=None,
@@ -171,6 +192,17 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=run)
 
 
+def _seeds(text: str) -> int | tuple[int, ...]:
+    """``--seeds``: a count N (seeds 0..N-1) or a comma-separated list of seeds."""
+    try:
+        if "," in text:
+            return tuple(int(s) for s in text.split(",") if s.strip())
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: a count (e.g. 5) or a list of seeds (e.g. 1,2,3)") from None
+
+
 def _write_json(path: Path, target: str, figures: dict[str, float]) -> None:
     """``{"target": …, **figures}`` to ``path``, replaced atomically (a long bench rewrites
     it as it goes: a reader never sees half a file)."""
@@ -181,6 +213,10 @@ def _write_json(path: Path, target: str, figures: dict[str, float]) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if isinstance(args.seeds, tuple) and args.target != "closed-loop":
+        print(f"dsfd bench {args.target}: --seeds takes a count N (seeds 0..N-1); a list "
+              "of seeds is for closed-loop", file=sys.stderr)
+        return 2
     for name in ("days", "cycles", "backlog"):
         value = getattr(args, name)
         if value is not None and not value > 0:
