@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -305,9 +306,11 @@ def aggregate_table(figs: Mapping[str, float], seeds: Sequence[int]) -> str:
 def bench_identify(spec: RunSpec, *, seeds: Sequence[int],
                    on_figures: Callable[[dict[str, Any]], None] | None = None,
                    show: Callable[[str], None] = print,
-                   progress: Callable[[str], None] | None = None) -> dict[str, Any]:
+                   progress: Callable[[str], None] | None = None,
+                   keep_state: Path | None = None) -> dict[str, Any]:
     """Run every seed, print its table as it finishes and hand the figures so far to
-    ``on_figures`` (``partial`` 1 until the last seed); return all figures.
+    ``on_figures`` (``partial`` 1 until the last seed); return all figures. ``keep_state``:
+    keep each seed's state directory there (:func:`~dsfd.bench.identify_run.run_seed`).
 
     A run stopped by SIGINT/SIGTERM ends after the current cycle: the seeds finished so far
     are kept (``partial`` 1, ``stopped`` 1); the interrupted seed is left out.
@@ -327,7 +330,7 @@ def bench_identify(spec: RunSpec, *, seeds: Sequence[int],
          f"{seeds[0]}..{seeds[-1]}, weather {spec.weather}")
     for seed in seeds:
         try:
-            trace = run_seed(spec, seed, progress=progress)
+            trace = run_seed(spec, seed, progress=progress, keep_state=keep_state)
         except KeyboardInterrupt as exc:
             show(f"stopped: {exc}; seed {seed} left out")
             stopped = True

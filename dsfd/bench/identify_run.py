@@ -217,18 +217,25 @@ class _Recorder:
                           f"{time.perf_counter() - self._t0:.0f} s")
 
 
-def run_seed(spec: RunSpec, seed: int, *,
-             progress: Callable[[str], None] | None = None) -> SeedTrace:
+def run_seed(spec: RunSpec, seed: int, *, progress: Callable[[str], None] | None = None,
+             keep_state: Path | None = None) -> SeedTrace:
     """Run the daemon for ``spec.cycles`` cycles against the plant of ``seed``.
+
+    The daemon's state directory is temporary, or ``keep_state/seed<seed>`` (created; it must
+    not exist yet) to read it afterwards with ``dsfd report``.
 
     Raises
     ------
     FileNotFoundError, ValueError
-        Unknown weather, bad choices.
+        Unknown weather, bad choices, an existing ``keep_state/seed<seed>``.
     KeyboardInterrupt
         The run was stopped (SIGINT/SIGTERM) before its last cycle.
     """
     spec.check()
+    kept = None if keep_state is None else Path(keep_state) / f"seed{seed}"
+    if kept is not None and kept.exists():
+        raise ValueError(f"{kept} exists: a kept state directory is never reused (its runs "
+                         "would overlap the new one)")
     cfg = _lifted(spec.cfg)
     options = plant_options_for(cfg, plant=spec.plant, sensors=spec.sensors)
     sim = simulated_plant(cfg, weather=spec.weather, cycles=spec.cycles, seed=seed,
@@ -241,7 +248,8 @@ def run_seed(spec: RunSpec, seed: int, *,
     cpu0, wall0 = os.times(), time.perf_counter()
     try:
         with tempfile.TemporaryDirectory(prefix="dsfd-bench-identify-") as tmp:
-            state_dir = Path(tmp)
+            state_dir = Path(tmp) if kept is None else kept
+            state_dir.mkdir(parents=True, exist_ok=True)
             recorder = _Recorder(spec, space, state_dir, progress, seed)
             opts = RunOptions(config_path=spec.config_path, dry_run=True, plant="sim",
                               plant_fidelity="full" if spec.plant == "truth" else "lumped",

@@ -140,7 +140,8 @@ def _bench_identify(args: argparse.Namespace) -> dict[str, Any]:
         spec, seeds=range(args.seed, args.seed + n),
         on_figures=None if args.json is None else lambda fig: _write_json(
             args.json, args.target, fig),
-        progress=lambda msg: print(msg, file=sys.stderr, flush=True))
+        progress=lambda msg: print(msg, file=sys.stderr, flush=True),
+        keep_state=args.keep_state)
 
 
 #: Benchmark targets: name → function(args) → flat figures.
@@ -161,7 +162,7 @@ OWN_TABLES = frozenset({"identify"})
 #: ``identify`` defaults: the seeds and days of issue 35's targets.
 IDENTIFY_SEEDS, IDENTIFY_DAYS = 5, 3.0
 #: Options only ``identify`` takes.
-IDENTIFY_ONLY = ("plant", "sensors", "protocol")
+IDENTIFY_ONLY = ("plant", "sensors", "protocol", "keep_state")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -208,6 +209,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--protocol", choices=("paper", "closed-loop"), default=None,
                    help="identify: paper = the paper's random louver angle and regime every "
                    "30-90 min (default); closed-loop = the daemon's own decisions")
+    p.add_argument("--keep-state", type=Path, default=None, metavar="DIR",
+                   help="identify: keep each seed's daemon state directory as DIR/seed<N> "
+                   "(for dsfd report; default: temporary)")
     p.add_argument("--json", type=Path, default=None, help="write the figures as JSON "
                    "(identify: rewritten after every seed)")
     p.set_defaults(handler=run)
@@ -231,7 +235,8 @@ def run(args: argparse.Namespace) -> int:
     if args.target != "identify":
         for name in IDENTIFY_ONLY:
             if getattr(args, name) is not None:
-                print(f"dsfd bench: --{name} only applies to the identify target",
+                print(f"dsfd bench: --{name.replace('_', '-')} only applies to the "
+                      "identify target",
                       file=sys.stderr)
                 return 2
     try:
