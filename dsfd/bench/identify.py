@@ -162,28 +162,26 @@ def seed_figures(trace: SeedTrace) -> dict[str, float]:
             out[f"{name}.day{k + 2}_change_{kind}"] = float(changes[k, i])
         out[f"{name}.day_change_max_{kind}"] = (float(np.nanmax(changes[:, i]))
                                                 if np.isfinite(changes[:, i]).any() else math.nan)
-    out.update(_error_figures(trace, last))
+    out.update(_error_figures(trace))
     out.update({k: float(v) for k, v in trace.counts.items()})
     return out
 
 
-def _error_figures(trace: SeedTrace, last: np.ndarray) -> dict[str, float]:
+def _error_figures(trace: SeedTrace) -> dict[str, float]:
     """``mae.<output>.h1_model_<unit>`` … over the run and ``mae_last_day.…`` over its last
     day (the errors of ``dsfd report``; the horizon errors sit at the cycle they were made)."""
     err = trace.errors
     hz = f"h{err.horizon_steps}"
-    # The database's cycles are the run's cycles, in order.
-    n = min(last.size, *(a.size for a in err.model.values()))
+    every = np.ones(trace.errors_time_s.shape, bool)
     out: dict[str, float] = {}
-    for prefix, rows in (("mae", np.ones(n, bool)), ("mae_last_day", last[:n])):
+    for prefix, rows in (("mae", every), ("mae_last_day", last_day(trace.errors_time_s))):
         for key, name, unit in OUTPUTS:
-            out[f"{prefix}.{name}.h1_model_{unit}"] = _mean(err.model[key][:n][rows])
-            out[f"{prefix}.{name}.h1_persistence_{unit}"] = _mean(err.persistence[key][:n][rows])
+            out[f"{prefix}.{name}.h1_model_{unit}"] = _mean(err.model[key][rows])
+            out[f"{prefix}.{name}.h1_persistence_{unit}"] = _mean(err.persistence[key][rows])
             if key in err.horizon_model:
-                out[f"{prefix}.{name}.{hz}_model_{unit}"] = _mean(
-                    err.horizon_model[key][:n][rows])
+                out[f"{prefix}.{name}.{hz}_model_{unit}"] = _mean(err.horizon_model[key][rows])
                 out[f"{prefix}.{name}.{hz}_persistence_{unit}"] = _mean(
-                    err.horizon_persistence[key][:n][rows])
+                    err.horizon_persistence[key][rows])
     return out
 
 

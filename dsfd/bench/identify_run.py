@@ -112,8 +112,10 @@ class SeedTrace:
     space : ParameterSpace
         Bounds and fixed components of the calibration.
     errors : PredictionErrors
-        One-step and horizon errors of the model and of persistence, per cycle, computed
-        from the daemon's database as ``dsfd report`` does.
+        One-step and horizon errors of the model and of persistence, per stored cycle,
+        computed from the daemon's database as ``dsfd report`` does.
+    errors_time_s : ndarray, [s]
+        The stored cycles' times (the rows of ``errors``).
     step_s : float, [s]
     counts : dict
         ``cycles``, ``calibration_updates``, ``calibration_attempts``, ``late_calibrations``,
@@ -128,6 +130,7 @@ class SeedTrace:
     truth: np.ndarray | None
     space: ParameterSpace
     errors: PredictionErrors
+    errors_time_s: np.ndarray
     step_s: float
     counts: dict[str, float]
 
@@ -272,7 +275,7 @@ def run_seed(spec: RunSpec, seed: int, *, progress: Callable[[str], None] | None
                   wall_s=time.perf_counter() - wall0)
     return SeedTrace(seed=seed, time_s=recorder.time_s, theta=recorder.theta,
                      sd_ratio=recorder.sd_ratio, truth=truth, space=space, errors=errors,
-                     step_s=step_s, counts=counts)
+                     errors_time_s=history.time_s, step_s=step_s, counts=counts)
 
 
 def _controller_factory(cfg: PanelConfig, spec: RunSpec, start_s: float, seed: int

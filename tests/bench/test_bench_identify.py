@@ -169,13 +169,21 @@ def test_relative_error_and_the_day_windows_on_known_values():
 
 def _trace(theta: np.ndarray, ratio: np.ndarray, truth: np.ndarray, space: ParameterSpace
            ) -> SeedTrace:
+    """Two days; x1's one-step error 1 K on day 1 and 0.5 K on day 2 (persistence 0.25 K),
+    its 15-step error 2 K, scored on day 2 only; the other outputs not scored."""
     n = theta.shape[0]
-    nan = {k: np.full(n, np.nan) for k in ("x1", "x2", "x3", "x4", "x5", "v")}
-    errors = PredictionErrors(nan, nan, dict(list(nan.items())[:5]),
-                              dict(list(nan.items())[:5]), 15)
-    return SeedTrace(seed=0, time_s=1.6e9 + 60.0 * np.arange(n), theta=theta, sd_ratio=ratio,
-                     truth=truth, space=space, errors=errors, step_s=60.0,
-                     counts={"cycles": float(n)})
+    day2 = np.arange(n) >= n // 2
+
+    def errors_of(x1: np.ndarray) -> dict[str, np.ndarray]:
+        return {"x1": x1, **{k: np.full(n, np.nan) for k in ("x2", "x3", "x4", "x5", "v")}}
+
+    hz = errors_of(np.where(day2, 2.0, np.nan))
+    hz.pop("v")
+    errors = PredictionErrors(errors_of(np.where(day2, 0.5, 1.0)), errors_of(np.full(n, 0.25)),
+                              hz, hz, 15)
+    t = 1.6e9 + 60.0 * np.arange(n)
+    return SeedTrace(seed=0, time_s=t, theta=theta, sd_ratio=ratio, truth=truth, space=space,
+                     errors=errors, errors_time_s=t, step_s=60.0, counts={"cycles": float(n)})
 
 
 def test_determined_follows_the_posterior_over_the_last_day_and_errors_use_it_too():
@@ -196,6 +204,11 @@ def test_determined_follows_the_posterior_over_the_last_day_and_errors_use_it_to
     assert figs["h_out.rel_err_last_day_median"] == pytest.approx(0.1)
     assert figs["h_out.day_change_max_rel"] == pytest.approx(1.2 * 1.1 - 1.0)
     assert figs["q_x1.abs_last_day_median_wm2"] == 0.0
+    assert figs["mae.x1.h1_model_k"] == pytest.approx(0.75)
+    assert figs["mae_last_day.x1.h1_model_k"] == pytest.approx(0.5)
+    assert figs["mae.x1.h1_persistence_k"] == pytest.approx(0.25)
+    assert figs["mae.x1.h15_model_k"] == pytest.approx(2.0)
+    assert math.isnan(figs["mae.x2.h1_model_k"])
     per_seed = {0: figs, 1: {**figs, "h_out.determined": 0.0, "h_out.at_bound_pct": 7.0}}
     agg = aggregate(per_seed)
     assert agg["all.h_out.determined_seeds"] == 1.0
