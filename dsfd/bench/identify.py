@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from dsfd.bench.identify_run import RunSpec, SeedTrace, run_seed
+from dsfd.bench.identify_run import RunSpec, SeedTrace, daemon_config, run_seed
 from dsfd.config.parameters import FIT_NAMES, N_PARAMS, OFFSET_NAMES, PARAMETER_NAMES
 
 __all__ = ["AT_BOUND_REL_TOL", "DAY_S", "DETERMINED_SD_RATIO", "OUTPUTS", "aggregate",
@@ -316,6 +316,8 @@ def bench_identify(spec: RunSpec, *, seeds: Sequence[int],
     spec.check()
     figs: dict[str, Any] = {
         "plant": spec.plant, "sensors": spec.sensors, "protocol": spec.protocol,
+        "model_cavity_air_profile": daemon_config(
+            spec.cfg, plant=spec.plant).model.cavity_air_profile,
         "weather": spec.weather, "days": spec.cycles * spec.cfg.model.step_s / DAY_S,
         "cycles_per_seed": float(spec.cycles), "first_seed": float(seeds[0]),
         "seeds": float(len(seeds)), "determined_sd_ratio": DETERMINED_SD_RATIO,
@@ -325,7 +327,8 @@ def bench_identify(spec: RunSpec, *, seeds: Sequence[int],
     stopped = False
     show(f"dsfd bench identify: {spec.plant} plant, {spec.sensors} sensors, {spec.protocol} "
          f"protocol, {figs['days']:g} days ({spec.cycles} cycles) per seed, seeds "
-         f"{seeds[0]}..{seeds[-1]}, weather {spec.weather}")
+         f"{seeds[0]}..{seeds[-1]}, weather {spec.weather}; the daemon's cavity air "
+         f"{figs['model_cavity_air_profile']}")
     for seed in seeds:
         try:
             trace = run_seed(spec, seed, progress=progress, keep_state=keep_state)

@@ -10,7 +10,8 @@ machine allows. Three things differ, all at the edge:
 * the plant is built here (:func:`dsfd.sim.daemon_plant.simulated_plant`) with the switches the
   bench asks for: the lumped-equivalent plant (the model's own structure, so the true θ is
   known: :meth:`~dsfd.sim.plant.config.TrueParameters.lumped_theta`; actuators ideal, as in the
-  model) or the full-fidelity truth plant, each with ideal or realistic sensors;
+  model; the daemon's cavity air well mixed like the plant's one node, :func:`daemon_config`)
+  or the full-fidelity truth plant, each with ideal or realistic sensors;
 * under ``protocol="paper"`` the cycle is a :class:`ScheduleController`, which applies the
   paper's random excitation (:func:`dsfd.sim.protocol.paper_protocol`) instead of the
   optimiser's decisions (hook: ``RunOptions.controller``); under ``"closed-loop"`` it is the
@@ -61,12 +62,14 @@ from dsfd.sim.protocol import Schedule, paper_protocol
 from dsfd.storage.calibration_file import load_state
 from dsfd.storage.history import read_history
 
-__all__ = ["PLANTS", "PROTOCOLS", "SENSORS", "RunSpec", "ScheduleController", "SeedTrace",
-           "plant_options_for", "run_seed"]
+__all__ = ["LUMPED_CAVITY_AIR_PROFILE", "PLANTS", "PROTOCOLS", "SENSORS", "RunSpec",
+           "ScheduleController", "SeedTrace", "daemon_config", "plant_options_for", "run_seed"]
 
 PLANTS = ("lumped", "truth")
 SENSORS = ("ideal", "realistic")
 PROTOCOLS = ("paper", "closed-loop")
+#: The daemon's cavity air on the lumped-equivalent plant (:func:`daemon_config`).
+LUMPED_CAVITY_AIR_PROFILE = "well_mixed"
 #: Progress lines every this many cycles (6 simulated hours).
 PROGRESS_EVERY = 360
 
@@ -170,10 +173,18 @@ def plant_options_for(cfg: PanelConfig, *, plant: str, sensors: str) -> PlantOpt
     raise ValueError(f"--plant {plant!r}: choose one of {', '.join(PLANTS)}")
 
 
-def _lifted(cfg: PanelConfig) -> PanelConfig:
-    """The panel with its decision, calibration and store budgets lifted (module doc)."""
+def daemon_config(cfg: PanelConfig, *, plant: str) -> PanelConfig:
+    """The panel as the bench's daemon runs it: the decision, calibration and store budgets
+    lifted (module doc), and on the lumped-equivalent plant the model's cavity air well mixed,
+    as the plant's one air node is (``model.cavity_air_profile``; the N = 1 equivalence of
+    docs/model.md#plant-switches): only then is the plant the model's own structure and its θ
+    the true one."""
+    model = cfg.model
+    if plant == "lumped":
+        model = dataclasses.replace(model, cavity_air_profile=LUMPED_CAVITY_AIR_PROFILE)
     return dataclasses.replace(
-        cfg, control=dataclasses.replace(cfg.control, time_budget_s=SIM_BUDGET_S),
+        cfg, model=model,
+        control=dataclasses.replace(cfg.control, time_budget_s=SIM_BUDGET_S),
         daemon=dataclasses.replace(cfg.daemon, calibrate_budget_s=SIM_BUDGET_S,
                                    store_budget_s=SIM_BUDGET_S))
 
@@ -239,7 +250,7 @@ def run_seed(spec: RunSpec, seed: int, *, progress: Callable[[str], None] | None
     if kept is not None and kept.exists():
         raise ValueError(f"{kept} exists: a kept state directory is never reused (its runs "
                          "would overlap the new one)")
-    cfg = _lifted(spec.cfg)
+    cfg = daemon_config(spec.cfg, plant=spec.plant)
     options = plant_options_for(cfg, plant=spec.plant, sensors=spec.sensors)
     sim = simulated_plant(cfg, weather=spec.weather, cycles=spec.cycles, seed=seed,
                           options=options)

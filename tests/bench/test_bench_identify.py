@@ -61,6 +61,7 @@ def test_the_cli_writes_per_seed_and_aggregate_figures_with_the_documented_keys(
     figs = json.loads(out.read_text())
     assert figs["target"] == "identify" and figs["partial"] == 0.0
     assert (figs["plant"], figs["sensors"], figs["protocol"]) == ("lumped", "ideal", "paper")
+    assert figs["model_cavity_air_profile"] == "well_mixed"
     assert figs["cycles_per_seed"] == CYCLES and figs["seeds_done"] == 2
     cfg = load_panel(panel)
     for seed in (3, 4):
@@ -118,6 +119,9 @@ def test_the_daemon_applies_the_protocol_and_the_recorded_estimate_is_the_stored
         cmd = schedule.at(float(t))
         assert (applied["phi_deg"][k], applied["afr"][k]) == (cmd.phi_deg, cmd.afr)
     assert set(history.decisions["method"]) == {"protocol"}
+    # On the lumped-equivalent plant the daemon's cavity air is well mixed, as the plant's.
+    assert history.config["model"]["cavity_air_profile"] == "well_mixed"
+    assert cfg.model.cavity_air_profile == "exponential"  # the panel file's
     # θ̂ recorded per cycle (from the state file the daemon saves) equals the database's
     # parameter history at every update; before the first update it is the prior.
     params = history.parameters
