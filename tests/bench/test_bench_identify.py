@@ -244,3 +244,20 @@ def test_a_kept_state_directory_is_never_reused(panel, tmp_path, capsys):
     assert main(["bench", "identify", "--config", str(panel), "--days", "0.01", "--seeds",
                  "1", "--keep-state", str(tmp_path)]) == 2
     assert f"{tmp_path / 'seed0'} exists" in capsys.readouterr().err
+
+
+def test_closed_loop_on_the_truth_plant_is_the_daemons_own_decisions_and_knows_no_truth(
+        panel, tmp_path):
+    cfg = load_panel(panel)
+    spec = RunSpec(config_path=panel, cfg=cfg, plant="truth", sensors="realistic",
+                   protocol="closed-loop", cycles=10)
+    trace = run_seed(spec, 1, keep_state=tmp_path)
+    history = read_history(tmp_path / "seed1")
+    assert trace.truth is None
+    assert set(history.decisions["method"]) == {"mpc"}
+    assert trace.counts["decisions_mpc"] == 10
+    # The daemon models the panel as configured (no structural change on the truth plant).
+    assert history.config["model"]["cavity_air_profile"] == cfg.model.cavity_air_profile
+    figs = seed_figures(trace)
+    assert not any(k.endswith((".true", ".rel_err_last")) for k in figs)
+    assert figs["h_out.at_bound_pct"] == 0.0  # the priors, 10 cycles before any update
