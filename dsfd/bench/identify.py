@@ -11,7 +11,8 @@ this module turns what it left into figures. Per parameter of ϑ = (θ, q):
 * **posterior/prior sd**: the sd of the daemon's posterior over the first prior's sd, both
   in the fitting coordinates (log θ; n and q linear), median over the last day. A parameter
   is **determined** when that median is below :data:`DETERMINED_SD_RATIO`: the data, not
-  the prior, fixed it;
+  the prior, fixed it. On the lumped plant also the error in posterior sds,
+  |z(θ̂) − z(θ_true)|/σ_post (median over the last day): is the posterior honest?
 * **day-to-day change**: the relative change of the daily median θ̂ between consecutive
   simulated days (days counted from the run's first cycle); absolute [W/m2] for the offsets;
 * the offsets' size: median |q̂| over the last day [W/m2].
@@ -33,10 +34,12 @@ import numpy as np
 
 from dsfd.bench.identify_run import RunSpec, SeedTrace, daemon_config, run_seed
 from dsfd.config.parameters import FIT_NAMES, N_PARAMS, OFFSET_NAMES, PARAMETER_NAMES
+from dsfd.estimation.params import ParameterSpace, full_vector
 
 __all__ = ["AT_BOUND_REL_TOL", "DAY_S", "DETERMINED_SD_RATIO", "OUTPUTS", "aggregate",
            "aggregate_table", "at_bound", "at_bound_share", "bench_identify", "daily_medians",
-           "day_to_day_change", "last_day", "relative_error", "seed_figures", "seed_table"]
+           "day_to_day_change", "error_over_posterior_sd", "last_day", "relative_error",
+           "seed_figures", "seed_table"]
 
 #: A parameter whose posterior sd is below this fraction of its first prior's sd (median over
 #: the last day) is "determined" by the data. 0.5: the data carry at least three times the
@@ -117,6 +120,15 @@ def day_to_day_change(medians: np.ndarray, *, relative: np.ndarray) -> np.ndarra
         return np.where(relative, np.abs(b / a - 1.0), np.abs(b - a))
 
 
+def error_over_posterior_sd(theta: np.ndarray, sd_ratio: np.ndarray, truth: np.ndarray,
+                            space: ParameterSpace) -> np.ndarray:
+    """|z(θ̂) − z(θ_true)| / σ_post per cycle and component (n, 13), in the fitting
+    coordinates (σ_post = ratio × the first prior's sd); the offsets' truth is 0. An honest
+    posterior gives about 0.67 (the median of |N(0, 1)|); far more: it is overconfident."""
+    z_true = space.to_z(full_vector(np.asarray(truth, float)))
+    return np.abs(space.to_z(theta) - z_true) / (np.asarray(sd_ratio, float) * space.prior_sd)
+
+
 def _median(x: np.ndarray) -> float:
     x = np.asarray(x, float)
     return float(np.nanmedian(x)) if np.isfinite(x).any() else math.nan
@@ -137,6 +149,8 @@ def seed_figures(trace: SeedTrace) -> dict[str, float]:
     changes = day_to_day_change(daily_medians(trace.time_s, trace.theta),
                                 relative=np.arange(len(FIT_NAMES)) < N_PARAMS)
     final = trace.theta[np.flatnonzero(np.isfinite(trace.time_s))[-1]]
+    z_err = (None if trace.truth is None else
+             error_over_posterior_sd(trace.theta[last], trace.sd_ratio[last], trace.truth, sp))
     out: dict[str, float] = {}
     for i, name in enumerate(FIT_NAMES):
         offset = name in OFFSET_NAMES
@@ -155,6 +169,8 @@ def seed_figures(trace: SeedTrace) -> dict[str, float]:
         out[f"{name}.at_lower_pct"] = 100.0 * float(lo_share[i])
         out[f"{name}.at_upper_pct"] = 100.0 * float(hi_share[i])
         out[f"{name}.sd_ratio_last_day_median"] = float(ratio[i])
+        if z_err is not None:
+            out[f"{name}.err_over_post_sd_last_day_median"] = _median(z_err[:, i])
         out[f"{name}.fixed"] = float(bool(sp.fixed[i]))
         out[f"{name}.determined"] = float(not sp.fixed[i] and ratio[i] < DETERMINED_SD_RATIO)
         kind = "wm2" if offset else "rel"
@@ -224,7 +240,7 @@ def seed_table(seed: int, figs: Mapping[str, float]) -> str:
              f"{figs.get('calibration_updates', 0):.0f} calibration updates, "
              f"{figs.get('cpu_s', math.nan):.0f} s CPU",
              f"  {'parameter':<9} {'true':>8} {'last':>8} {'rel.err':>8} {'at bound':>9} "
-             f"{'sd/prior':>8} {'determined':>10} {'day change':>10}"]
+             f"{'sd/prior':>8} {'determined':>10} {'day change':>10} {'err/sd':>7}"]
     for name in PARAMETER_NAMES:
         lines.append(
             f"  {name:<9} {_num(figs.get(f'{name}.true', math.nan)):>8} "
@@ -233,9 +249,11 @@ def seed_table(seed: int, figs: Mapping[str, float]) -> str:
             f"{figs[f'{name}.at_bound_pct']:>7.1f} % "
             f"{_num(figs[f'{name}.sd_ratio_last_day_median'], '.2f'):>8} "
             f"{_determined(figs, name):>10} "
-            f"{_pct(figs[f'{name}.day_change_max_rel']):>10}")
+            f"{_pct(figs[f'{name}.day_change_max_rel']):>10} "
+            f"{_num(figs.get(f'{name}.err_over_post_sd_last_day_median', math.nan), '.2g'):>7}")
     lines.append(f"  {'offset':<9} {'':>8} {'last':>8} {'|q|':>8} {'at bound':>9} "
-                 f"{'sd/prior':>8} {'determined':>10} {'day change':>10}   [W/m2]")
+                 f"{'sd/prior':>8} {'determined':>10} {'day change':>10} {'err/sd':>7}"
+                 "   [W/m2]")
     for name in OFFSET_NAMES:
         lines.append(
             f"  {name:<9} {'':>8} {_num(figs[f'{name}.last_wm2'], '.1f'):>8} "
@@ -243,10 +261,12 @@ def seed_table(seed: int, figs: Mapping[str, float]) -> str:
             f"{figs[f'{name}.at_bound_pct']:>7.1f} % "
             f"{_num(figs[f'{name}.sd_ratio_last_day_median'], '.2f'):>8} "
             f"{_determined(figs, name):>10} "
-            f"{_num(figs[f'{name}.day_change_max_wm2'], '.1f'):>10}")
+            f"{_num(figs[f'{name}.day_change_max_wm2'], '.1f'):>10} "
+            f"{_num(figs.get(f'{name}.err_over_post_sd_last_day_median', math.nan), '.2g'):>7}")
     lines.append("  (rel.err: median |θ̂/θ_true − 1| over the last day; |q|: median |q̂| over "
                  "the last day [W/m2]; sd/prior: median over the last day; day change: largest "
-                 "between consecutive days)")
+                 "between consecutive days; err/sd: median |z(θ̂) − z(θ_true)|/σ_post over the "
+                 "last day, about 0.67 for an honest posterior)")
     lines += _error_table(figs)
     return "\n".join(lines)
 

@@ -24,6 +24,7 @@ from dsfd.bench.identify import (
     at_bound_share,
     daily_medians,
     day_to_day_change,
+    error_over_posterior_sd,
     last_day,
     relative_error,
     seed_figures,
@@ -157,6 +158,23 @@ def test_at_bound_share_counts_the_cycles_on_each_bound():
     np.testing.assert_allclose(hi, [0.0, 2 / 9, 0.0])
 
 
+def test_error_over_posterior_sd_in_the_fitting_coordinates():
+    cfg = load_panel(ROOT / "config" / "panels" / "suwon-south.yaml")
+    space = ParameterSpace.from_panel(cfg)
+    truth = space.default[:N_PARAMS].copy()
+    theta = space.default.copy()
+    i_h, i_n, i_q = (FIT_NAMES.index(k) for k in ("h_ca1", "n", "q_x2"))
+    theta[i_h] *= math.exp(0.35)      # log error 0.35
+    theta[i_n] += 0.03                # n is linear
+    theta[i_q] = -5.0                 # the offsets' truth is 0 [W/m2]
+    ratio = np.full(theta.size, 0.5)
+    z = error_over_posterior_sd(theta[None], ratio[None], truth, space)[0]
+    assert z[i_h] == pytest.approx(0.35 / (0.5 * cfg.calibration.prior_log_sd))
+    assert z[i_n] == pytest.approx(0.03 / (0.5 * cfg.calibration.prior_sd_n))
+    assert z[i_q] == pytest.approx(5.0 / (0.5 * cfg.calibration.offset_sd_wm2))
+    assert z[FIT_NAMES.index("h_out")] == 0.0
+
+
 def test_relative_error_and_the_day_windows_on_known_values():
     np.testing.assert_allclose(relative_error([3.0, 1.0, 2.0], [2.0, 2.0, 2.0]),
                                [0.5, 0.5, 0.0])
@@ -208,6 +226,9 @@ def test_determined_follows_the_posterior_over_the_last_day_and_errors_use_it_to
     assert figs["h_out.rel_err_last_day_median"] == pytest.approx(0.1)
     assert figs["h_out.day_change_max_rel"] == pytest.approx(1.2 * 1.1 - 1.0)
     assert figs["q_x1.abs_last_day_median_wm2"] == 0.0
+    # 10 % off in log coordinates over a posterior sd of 0.45 × the prior's 0.7
+    assert figs["h_out.err_over_post_sd_last_day_median"] == pytest.approx(
+        math.log(1.1) / (0.9 * DETERMINED_SD_RATIO * space.prior_sd[i_hout]))
     assert figs["mae.x1.h1_model_k"] == pytest.approx(0.75)
     assert figs["mae_last_day.x1.h1_model_k"] == pytest.approx(0.5)
     assert figs["mae.x1.h1_persistence_k"] == pytest.approx(0.25)
