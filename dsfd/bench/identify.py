@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from dsfd.bench.identify_run import RunSpec, SeedTrace, daemon_config, run_seed
+from dsfd.bench.identify_targets import issue_targets
 from dsfd.config.parameters import FIT_NAMES, N_PARAMS, OFFSET_NAMES, PARAMETER_NAMES
 from dsfd.estimation.params import ParameterSpace, full_vector
 
@@ -370,6 +371,10 @@ def bench_identify(spec: RunSpec, *, seeds: Sequence[int],
     figs["stopped"] = float(stopped)
     figs["partial"] = float(stopped)
     if per_seed:
+        targets, lines = issue_targets(figs, list(per_seed), plant=spec.plant)
+        figs.update(targets)
         show(aggregate_table(figs, list(per_seed)))
+        show("issue 35's targets (docs/benchmarks-identify.md):")
+        show("\n".join(lines))
         show("")
     return figs

@@ -30,6 +30,7 @@ from dsfd.bench.identify import (
     seed_figures,
 )
 from dsfd.bench.identify_run import RunSpec, SeedTrace, plant_options_for, run_seed
+from dsfd.bench.identify_targets import issue_targets
 from dsfd.cli import main
 from dsfd.config import load_panel
 from dsfd.config.parameters import FIT_NAMES, N_PARAMS, PARAMETER_NAMES
@@ -101,6 +102,9 @@ def test_the_cli_writes_per_seed_and_aggregate_figures_with_the_documented_keys(
     # The human tables: one per seed and the aggregate.
     assert "seed 3:" in done.stdout and "seed 4:" in done.stdout
     assert "all seeds (3, 4)" in done.stdout
+    assert "issue 35's targets" in done.stdout
+    assert {k for k in figs if k.startswith("target.")} == {
+        "target.determined_within_25pct", "target.at_bound_le_5pct", "target.offsets_le_10wm2"}
 
 
 # --------------------------------------------------------------------------- the daemon run
@@ -282,3 +286,34 @@ def test_closed_loop_on_the_truth_plant_is_the_daemons_own_decisions_and_knows_n
     figs = seed_figures(trace)
     assert not any(k.endswith((".true", ".rel_err_last")) for k in figs)
     assert figs["h_out.at_bound_pct"] == 0.0  # the priors, 10 cycles before any update
+
+
+def test_the_issue_targets_name_each_offender():
+    figs = {"seed0.h_out.determined": 1.0, "seed0.h_out.rel_err_last_day_median": 0.3,
+            "seed0.h_in.determined": 0.0, "seed0.h_in.rel_err_last_day_median": 0.9,
+            "seed1.h_out.determined": 1.0, "seed1.h_out.rel_err_last_day_median": 0.2}
+    for s in (0, 1):
+        figs.update({f"seed{s}.{p}.at_bound_pct": 0.0 for p in FIT_NAMES})
+        figs.update({f"seed{s}.q_x{i}.abs_last_day_median_wm2": 2.0 for i in range(1, 5)})
+    figs["seed1.h_ca4.at_bound_pct"] = 5.5
+    figs["seed1.q_x1.abs_last_day_median_wm2"] = 12.0
+    out, lines = issue_targets(figs, [0, 1], plant="lumped")
+    assert out == {"target.determined_within_25pct": 0.0, "target.offsets_le_10wm2": 0.0,
+                   "target.at_bound_le_5pct": 0.0}
+    text = "\n".join(lines)
+    # h_in is 90 % off but undetermined: not an offender; seed 1's h_out is within 25 %.
+    assert "NOT met: seed 0 h_out 30 %" in text and "h_in" not in text
+    assert "seed 1 h_ca4 5.5 %" in text and "seed 1 q_x1 12.0 W/m2" in text
+    # Truth plant: the model must beat persistence on every output and horizon it has.
+    truth = {f"seed0.{p}.at_bound_pct": 0.0 for p in FIT_NAMES}
+    for x in ("x1", "x2", "x3", "x4", "x5"):
+        truth.update({f"seed0.mae.{x}.h1_model_k": 0.2, f"seed0.mae.{x}.h1_persistence_k": 0.3,
+                      f"seed0.mae.{x}.h15_model_k": 0.4,
+                      f"seed0.mae.{x}.h15_persistence_k": 0.5})
+    truth.update({"seed0.mae.v_cav.h1_model_ms": 0.02, "seed0.mae.v_cav.h1_persistence_ms": 0.03})
+    out, _ = issue_targets(truth, [0], plant="truth")
+    assert out == {"target.model_below_persistence": 1.0, "target.at_bound_le_10pct": 1.0}
+    truth["seed0.mae.x5.h15_model_k"] = 0.6
+    out, lines = issue_targets(truth, [0], plant="truth")
+    assert out["target.model_below_persistence"] == 0.0
+    assert "NOT met: seed 0 x5 h15" in "\n".join(lines)
