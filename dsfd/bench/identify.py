@@ -350,22 +350,24 @@ def bench_identify(spec: RunSpec, *, seeds: Sequence[int],
          f"protocol, {figs['days']:g} days ({spec.cycles} cycles) per seed, seeds "
          f"{seeds[0]}..{seeds[-1]}, weather {spec.weather}; the daemon's cavity air "
          f"{figs['model_cavity_air_profile']}")
+    days = spec.cycles * spec.cfg.model.step_s / DAY_S
     for seed in seeds:
         try:
             trace = run_seed(spec, seed, progress=progress, keep_state=keep_state)
-        except KeyboardInterrupt as exc:
-            show(f"stopped: {exc}; seed {seed} left out")
+            done = seed_figures(trace)
+        except KeyboardInterrupt as exc:  # the daemon stopped on SIGINT/SIGTERM, or Ctrl-C
+            show(f"stopped: {exc or 'interrupted'}; seed {seed} left out")
             stopped = True
             break
-        per_seed[seed] = seed_figures(trace)
-        show(seed_table(seed, per_seed[seed]))
-        show("")
-        figs.update({f"seed{seed}.{k}": v for k, v in per_seed[seed].items()})
-        days = spec.cycles * spec.cfg.model.step_s / DAY_S
+        per_seed[seed] = done
+        figs.update({f"seed{seed}.{k}": v for k, v in done.items()})
         figs["cpu_s_per_seed_day"] = _mean(np.array(
             [f["cpu_s"] for f in per_seed.values()])) / days
+        show(seed_table(seed, done))
+        show("")
         if on_figures is not None and seed != seeds[-1]:
-            on_figures({**figs, **aggregate(per_seed), "partial": 1.0})
+            on_figures({**figs, **aggregate(per_seed), "seeds_done": float(len(per_seed)),
+                        "partial": 1.0})
     figs.update(aggregate(per_seed))
     figs["seeds_done"] = float(len(per_seed))
     figs["stopped"] = float(stopped)

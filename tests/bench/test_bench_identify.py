@@ -10,8 +10,10 @@ from __future__ import annotations
 
 import json
 import math
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -317,3 +319,29 @@ def test_the_issue_targets_name_each_offender():
     out, lines = issue_targets(truth, [0], plant="truth")
     assert out["target.model_below_persistence"] == 0.0
     assert "NOT met: seed 0 x5 h15" in "\n".join(lines)
+
+
+def test_a_stopped_run_keeps_the_seeds_it_finished(panel, tmp_path):
+    out = tmp_path / "identify.json"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "dsfd", "bench", "identify", "--config", str(panel),
+         "--days", "0.1", "--seeds", "2", "--json", str(out)],
+        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 300.0  # hang guard, not an assertion
+        while not out.exists() and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.05)
+        first = json.loads(out.read_text())  # written when seed 0 was done
+        proc.send_signal(signal.SIGINT)
+        stdout, _ = proc.communicate(timeout=300)
+    finally:
+        proc.kill()
+    assert first["partial"] == 1.0 and first["seeds_done"] == 1.0
+    assert "seed0.h_out.at_bound_pct" in first
+    assert not any(k.startswith("seed1.") for k in first)
+    assert proc.returncode == 0
+    final = json.loads(out.read_text())
+    assert (final["stopped"], final["partial"], final["seeds_done"]) == (1.0, 1.0, 1.0)
+    assert final["seed0.h_out.at_bound_pct"] == first["seed0.h_out.at_bound_pct"]
+    assert not any(k.startswith("seed1.") for k in final)
+    assert "seed 1 left out" in stdout
