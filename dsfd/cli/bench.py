@@ -3,7 +3,8 @@
 Targets are looked up in :data:`TARGETS` (name → function taking the parsed arguments and
 returning a flat dict of figures with units in the key names). To add a target, write such
 a function and add it to the dict; the common options below are passed to every target.
-A human table is printed; ``--json PATH`` writes the same figures.
+A human table is printed (the figures one a line, or the target's own tables for those in
+:data:`OWN_TABLES`); ``--json PATH`` writes the same figures.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import os
 import sys
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from dsfd.config import ConfigError, load_panel
 from dsfd.sim.choices import BENCH_CONTROLLERS
@@ -127,15 +129,40 @@ def _bench_closed_loop(args: argparse.Namespace) -> dict[str, float]:
         figures = bench_closed_loop(cfg, series, seed=args.seed, **options)
         print(report(figures))
     else:
-        seeds = range(args.seeds) if isinstance(args.seeds, int) else args.seeds
+        seeds = (range(args.seed, args.seed + args.seeds) if isinstance(args.seeds, int)
+                 else args.seeds)
         figures = bench_closed_loop_seeds(cfg, series, seeds=tuple(seeds), **options)
         print(share_table(figures))
     print()
     return figures
 
 
+def _bench_identify(args: argparse.Namespace) -> dict[str, Any]:
+    from dsfd.bench.identify import bench_identify
+    from dsfd.bench.identify_run import RunSpec
+    from dsfd.daemon.runner import load_for_run
+    from dsfd.sim.daemon_plant import DEFAULT_WEATHER
+
+    cfg = load_for_run(args.config, simulated_plant=True, dry_run=True)
+    days = IDENTIFY_DAYS if args.days is None else args.days
+    cycles = round(days * 86400.0 / cfg.daemon.cycle_period_s)
+    if cycles < 1:
+        raise ValueError(f"--days {args.days}: less than one cycle "
+                         f"({cfg.daemon.cycle_period_s:g} s)")
+    spec = RunSpec(config_path=args.config, cfg=cfg, plant=args.plant or "lumped",
+                   sensors=args.sensors or "realistic", protocol=args.protocol or "paper",
+                   cycles=cycles, weather=args.weather or DEFAULT_WEATHER)
+    n = IDENTIFY_SEEDS if args.seeds is None else args.seeds
+    return bench_identify(
+        spec, seeds=range(args.seed, args.seed + n),
+        on_figures=None if args.json is None else lambda fig: _write_json(
+            args.json, args.target, fig),
+        progress=lambda msg: print(msg, file=sys.stderr, flush=True),
+        keep_state=args.keep_state)
+
+
 #: Benchmark targets: name → function(args) → flat figures.
-TARGETS: dict[str, Callable[[argparse.Namespace], dict[str, float]]] = {
+TARGETS: dict[str, Callable[[argparse.Namespace], dict[str, Any]]] = {
     "model": _bench_model,
     "control": _bench_control,
     "plant": _bench_plant,
@@ -145,7 +172,14 @@ TARGETS: dict[str, Callable[[argparse.Namespace], dict[str, float]]] = {
     "calibration": _bench_calibration,
     "paper-tables": _bench_paper_tables,
     "closed-loop": _bench_closed_loop,
+    "identify": _bench_identify,
 }
+#: Targets that print their own tables (their figures are too many to list one a line).
+OWN_TABLES = frozenset({"identify"})
+#: ``identify`` defaults: the seeds and days of issue 35's targets.
+IDENTIFY_SEEDS, IDENTIFY_DAYS = 5, 3.0
+#: Options only ``identify`` takes.
+IDENTIFY_ONLY = ("plant", "sensors", "protocol", "keep_state")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -160,15 +194,17 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "10,000 one-minute cycles; paper-tables: 3 scored days after the "
                    "training day; plant-velocity: the paper's 8-11 Dec 2008, or with "
                    "--weather from the record's second day to its end; closed-loop: 1 scored "
-                   "day per case)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the target's randomness")
+                   "day per case; identify: 3 days per seed)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the target's randomness "
+                   "(identify: the first seed of --seeds)")
     p.add_argument("--cases", type=int, default=200,
                    help="control: random decision problems judged against brute force")
     p.add_argument("--seeds", type=_seeds, default=None,
                    help="plant-velocity: seeded draws of the plant's true parameters (default "
                    "10); paper-tables: run seeds 0..N-1 and print the per-seed cavity-speed "
-                   "table; closed-loop: N (seeds 0..N-1) or a list such as 1,2,3, and print "
-                   "the share per case and seed")
+                   "table; identify and closed-loop: run seeds SEED..SEED+N-1 (identify: "
+                   "default 5); closed-loop also takes a list such as 1,2,3, and prints the "
+                   "share per case and seed")
     p.add_argument("--oracle-cache", type=Path, default=None, metavar="FILE",
                    help="closed-loop: take the plant oracle's figures from FILE where it has "
                    "them for the case, seed, days, weather and panel, and store new ones there "
@@ -188,7 +224,19 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--controllers", default=None,
                    help="closed-loop: comma-separated controllers (default "
                    f"{', '.join(BENCH_CONTROLLERS)})")
-    p.add_argument("--json", type=Path, default=None, help="write the figures as JSON")
+    p.add_argument("--plant", choices=("lumped", "truth"), default=None,
+                   help="identify: lumped = the lumped-equivalent plant (the model's structure, "
+                   "true parameters known; default), truth = the full-fidelity truth plant")
+    p.add_argument("--sensors", choices=("ideal", "realistic"), default=None,
+                   help="identify: the plant's sensors (default realistic: noise and biases)")
+    p.add_argument("--protocol", choices=("paper", "closed-loop"), default=None,
+                   help="identify: paper = the paper's random louver angle and regime every "
+                   "30-90 min (default); closed-loop = the daemon's own decisions")
+    p.add_argument("--keep-state", type=Path, default=None, metavar="DIR",
+                   help="identify: keep each seed's daemon state directory as DIR/seed<N> "
+                   "(for dsfd report; default: temporary)")
+    p.add_argument("--json", type=Path, default=None, help="write the figures as JSON "
+                   "(identify: rewritten after every seed)")
     p.set_defaults(handler=run)
 
 
@@ -203,7 +251,7 @@ def _seeds(text: str) -> int | tuple[int, ...]:
             f"{text!r}: a count (e.g. 5) or a list of seeds (e.g. 1,2,3)") from None
 
 
-def _write_json(path: Path, target: str, figures: dict[str, float]) -> None:
+def _write_json(path: Path, target: str, figures: dict[str, Any]) -> None:
     """``{"target": …, **figures}`` to ``path``, replaced atomically (a long bench rewrites
     it as it goes: a reader never sees half a file)."""
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -213,15 +261,28 @@ def _write_json(path: Path, target: str, figures: dict[str, float]) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    if isinstance(args.seeds, tuple) and args.target != "closed-loop":
-        print(f"dsfd bench {args.target}: --seeds takes a count N (seeds 0..N-1); a list "
-              "of seeds is for closed-loop", file=sys.stderr)
-        return 2
-    for name in ("days", "cycles", "backlog"):
+    if isinstance(args.seeds, tuple):
+        if args.target != "closed-loop":
+            print(f"dsfd bench {args.target}: --seeds takes a count N (seeds 0..N-1); a list "
+                  "of seeds is for closed-loop", file=sys.stderr)
+            return 2
+        if min(args.seeds, default=-1) < 0:
+            print(f"dsfd bench: --seeds {args.seeds}: seeds are 0 or more", file=sys.stderr)
+            return 2
+    for name in ("days", "cycles", "backlog", "seeds"):
         value = getattr(args, name)
+        if isinstance(value, tuple):
+            continue  # a list of seeds, checked above
         if value is not None and not value > 0:
             print(f"dsfd bench: --{name} {value}: must be positive", file=sys.stderr)
             return 2
+    if args.target != "identify":
+        for name in IDENTIFY_ONLY:
+            if getattr(args, name) is not None:
+                print(f"dsfd bench: --{name.replace('_', '-')} only applies to the "
+                      "identify target",
+                      file=sys.stderr)
+                return 2
     try:
         figures = TARGETS[args.target](args)
     except ConfigError as exc:
@@ -233,10 +294,11 @@ def run(args: argparse.Namespace) -> int:
     except RuntimeError as exc:  # a missing optional extra (MissingExtraError) or tool
         print(f"dsfd bench: {exc}", file=sys.stderr)
         return 2
-    print(f"dsfd bench {args.target}")
-    width = max(len(k) for k in figures)
-    for key, value in figures.items():
-        print(f"  {key:<{width}}  {value:14.4g}")
+    if args.target not in OWN_TABLES:
+        print(f"dsfd bench {args.target}")
+        width = max(len(k) for k in figures)
+        for key, value in figures.items():
+            print(f"  {key:<{width}}  {value:14.4g}")
     if args.json:
         _write_json(args.json, args.target, figures)
         print(f"wrote {args.json}")

@@ -111,6 +111,10 @@ class RunOptions:
     seed: int = 1
     #: Called after every cycle (benchmarks); must be quick.
     on_cycle: Callable[[CycleOutcome], None] | None = None
+    #: Builds the cycle instead of :class:`~dsfd.daemon.loop.Controller` (same arguments):
+    #: benchmarks that run the daemon with a subclass, e.g. one that applies a fixed
+    #: excitation schedule instead of the optimiser's decisions (``dsfd bench identify``).
+    controller: Callable[..., Controller] | None = None
 
     @property
     def simulated_plant(self) -> bool:
@@ -329,9 +333,10 @@ async def _serve_locked(opts: RunOptions, cfg: PanelConfig, *, state_dir: Path,
     store, calibration = open_state(opts, cfg, state_dir, clock)
     # A dry run never writes to hardware; an in-process simulated plant may follow.
     write_enabled = not opts.dry_run or not getattr(driver, "hardware", True)
-    controller = Controller(cfg, driver=driver, clock=clock, store=store,
-                            calibration=calibration, write_enabled=write_enabled,
-                            plant_heat_j=None if plant is None else plant.room_heat_now)
+    controller = (opts.controller or Controller)(
+        cfg, driver=driver, clock=clock, store=store, calibration=calibration,
+        write_enabled=write_enabled,
+        plant_heat_j=None if plant is None else plant.room_heat_now)
     restore_operator_state(controller.manual, store, clock)
     daemon = _Daemon(opts, cfg, clock, driver, store, controller, notifier, integrations)
     daemon.summary.start_calibration(calibration)
