@@ -249,11 +249,12 @@ class _Daemon:
             ("devices", new.devices != self.cfg.devices),
             ("daemon.state_directory",
              new.daemon.state_directory != self.cfg.daemon.state_directory),
-            ("mqtt", new.mqtt != self.cfg.mqtt)) if changed]
+            ("mqtt", new.mqtt != self.cfg.mqtt),
+            ("bacnet", new.bacnet != self.cfg.bacnet)) if changed]
         if kept:
             log.warning("reload: %s changed; restart the service to apply", ", ".join(kept))
             new = dataclasses.replace(
-                new, devices=self.cfg.devices, mqtt=self.cfg.mqtt,
+                new, devices=self.cfg.devices, mqtt=self.cfg.mqtt, bacnet=self.cfg.bacnet,
                 daemon=dataclasses.replace(new.daemon,
                                            state_directory=self.cfg.daemon.state_directory))
         note = self.controller.reconfigure(new)
