@@ -109,8 +109,11 @@ def set_slot(obj: Any, priority: int, value: Any) -> None:
     """Set (a value) or clear (None) one slot of a commandable object's priority array."""
     from bacpypes3.basetypes import PriorityValue
 
-    obj.priorityArray[priority - 1] = PriorityValue(null=()) if value is None else \
-        PriorityValue(value)
+    if value is None:
+        obj.priorityArray[priority - 1] = PriorityValue(null=())
+        return
+    kind = obj._elements["presentValue"]  # Real or Unsigned
+    obj.priorityArray[priority - 1] = PriorityValue(kind(kind.cast(value)))
 
 
 class PanelApplication(Application):
