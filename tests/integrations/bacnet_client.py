@@ -37,6 +37,7 @@ from bacpypes3.argparse import SimpleArgumentParser
 from bacpypes3.constructeddata import Any as AnyValue
 from bacpypes3.pdu import Address
 from bacpypes3.primitivedata import (
+    Boolean,
     CharacterString,
     Enumerated,
     Null,
@@ -50,6 +51,8 @@ def plain(value: Any) -> Any:
     """A bacpypes3 value as JSON."""
     if isinstance(value, ErrorRejectAbortNack):
         return {"error": type(value).__name__, **_error_fields(value)}
+    if isinstance(value, Boolean):
+        return bool(value)
     if isinstance(value, bool | int | float | str) or value is None:
         if isinstance(value, Enumerated):
             return str(value.attr) if hasattr(value, "attr") else int(value)

@@ -1,0 +1,145 @@
+"""The BACnet tests' pieces: a panel file with a ``bacnet:`` section on loopback, the daemon's
+run arguments, and the third-party client (``bacnet_client.py``) as a process of its own.
+
+The device binds 127.0.0.1 on a free UDP port; the client binds 127.0.0.1 on another one.
+BACnet/IP broadcasts go to the sender's own port on the subnet's broadcast address, so two
+endpoints on one host with different ports cannot reach each other by broadcast: the client
+sends its Who-Is and Who-Has to the device's address (unicast, which clause 16.10 allows),
+and the device answers the way it answers a broadcast one. Time limits are hang guards.
+"""
+
+from __future__ import annotations
+
+import json
+import queue
+import socket
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any
+
+from tests.daemon.harness import ROOT, write_panel
+
+CLIENT = Path(__file__).with_name("bacnet_client.py")
+#: Hang guard for one answer of the client [s].
+ANSWER_LIMIT_S = 30.0
+DEVICE_INSTANCE = 41001
+
+
+def free_udp_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def bacnet_panel(path: Path, *, port: int, writable: bool = False,
+                 bacnet: Mapping[str, Any] | None = None,
+                 extra: Mapping[str, Any] | None = None) -> Path:
+    """A simulation panel file whose BACnet device listens on 127.0.0.1:``port``."""
+    section = {"device_instance": DEVICE_INSTANCE, "address": "127.0.0.1", "port": port,
+               "writable": writable, **(bacnet or {})}
+    return write_panel(path, devices=False, extra={"bacnet": section, **(extra or {})})
+
+
+def run_args(panel: Path, state: Path, *, start: str, cycles: int, speed: float) -> list[str]:
+    return ["run", "--config", str(panel), "--dry-run", "--plant", "sim", "--plant-fidelity",
+            "lumped", "--start", start, "--cycles", str(cycles), "--speed", str(speed),
+            "--state-dir", str(state)]
+
+
+class BacnetClient:
+    """``bacnet_client.py`` in its own process; :meth:`ask` sends one request and returns its
+    answer, notifications are collected in :attr:`notifications`, every line in
+    :attr:`transcript` (requests as ``>``, answers as ``<``)."""
+
+    def __init__(self, device_port: int, *, bind_port: int | None = None) -> None:
+        self.bind_port = bind_port or free_udp_port()
+        self.cmd = [sys.executable, str(CLIENT), "--bind", f"127.0.0.1:{self.bind_port}",
+                    "--device", f"127.0.0.1:{device_port}"]
+        self.proc: subprocess.Popen[str] | None = None
+        self.answers: queue.Queue[dict[str, Any]] = queue.Queue()
+        self.notifications: list[dict[str, Any]] = []
+        self.transcript: list[str] = []
+        self._next = 0
+        self._lock = threading.Lock()
+
+    @property
+    def address(self) -> str:
+        return f"127.0.0.1:{self.bind_port}"
+
+    def start(self) -> BacnetClient:
+        self.proc = subprocess.Popen(self.cmd, cwd=ROOT, stdin=subprocess.PIPE,
+                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        threading.Thread(target=self._read, daemon=True).start()
+        ready = self.answers.get(timeout=ANSWER_LIMIT_S)
+        assert ready.get("ready"), ready
+        return self
+
+    def _read(self) -> None:
+        assert self.proc is not None and self.proc.stdout is not None
+        for line in self.proc.stdout:
+            with self._lock:
+                self.transcript.append(f"< {line.rstrip()}")
+            msg = json.loads(line)
+            if "cov" in msg:
+                with self._lock:
+                    self.notifications.append(msg)
+            else:
+                self.answers.put(msg)
+
+    def ask(self, op: str, **fields: Any) -> dict[str, Any]:
+        assert self.proc is not None and self.proc.stdin is not None
+        self._next += 1
+        request = {"id": self._next, "op": op, **fields}
+        line = json.dumps(request)
+        with self._lock:
+            self.transcript.append(f"> {line}")
+        self.proc.stdin.write(line + "\n")
+        self.proc.stdin.flush()
+        answer = self.answers.get(timeout=ANSWER_LIMIT_S)
+        assert answer.get("id") == request["id"], (request, answer)
+        assert "exception" not in answer, answer
+        return answer
+
+    def write(self, obj: str, value: Any, *, priority: int | None = 8, kind: str = "real"
+              ) -> Any:
+        return self.ask("write", object=obj, value=value, priority=priority,
+                        type=kind)["answer"]
+
+    def cov_values(self, obj: str, prop: str = "present-value") -> list[Any]:
+        with self._lock:
+            return [n["value"] for n in self.notifications
+                    if n["cov"] == obj and n["property"] == prop]
+
+    def wait_for(self, predicate: Callable[[BacnetClient], bool], *,
+                 limit_s: float = ANSWER_LIMIT_S) -> None:
+        deadline = time.monotonic() + limit_s
+        while not predicate(self):
+            if time.monotonic() > deadline:
+                raise AssertionError("the client did not see it in time; last lines:\n"
+                                     + "\n".join(self.transcript[-6:]))
+            time.sleep(0.05)
+
+    def stop(self) -> str:
+        """Quit; the client's stderr (empty unless it failed)."""
+        if self.proc is None:
+            return ""
+        if self.proc.poll() is None:
+            assert self.proc.stdin is not None
+            try:
+                self.proc.stdin.write('{"op": "quit"}\n')
+                self.proc.stdin.flush()
+                self.proc.wait(10)
+            except (OSError, subprocess.TimeoutExpired):
+                self.proc.kill()
+                self.proc.wait(10)
+        assert self.proc.stderr is not None
+        return self.proc.stderr.read()
+
+
+def rpm_values(answer: Mapping[str, Any]) -> dict[tuple[str, str], Any]:
+    """(object, property) → value of a ReadPropertyMultiple answer."""
+    return {(o, p): v for o, p, _, v in answer["values"]}

@@ -1,0 +1,212 @@
+"""BACnet/IP end to end: a third-party client (bacpypes3's client side, in a process of its
+own, ``bacnet_client.py``) → UDP on loopback → the real ``dsfd run`` (simulated plant, dry
+run) with a ``bacnet:`` section → its database, ``dsfd status``.
+
+* Who-Is is answered by an I-Am, Who-Has by an I-Have; a ReadPropertyMultiple of every
+  object returns the values the database holds for the cycle the "stored cycle" point names
+  (samples, decision, model rows, queried here independently) and the MQTT state message
+  of that cycle; a read-only device refuses writes (write-access-denied) and files nothing.
+* A write of the louver at priority 8 is an operator hold from the next cycle; ``dsfd
+  status`` names the BACnet requester; relinquishing it ends the hold and the controller
+  decides again; a COV subscriber is notified of every stored cycle, and of the device
+  going out of service when the daemon stops.
+* Every bad write gets its BACnet error and changes nothing.
+
+Cycles are paced (``--speed``): 60 simulated seconds every 0.25 s. Time limits are hang
+guards.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import signal
+import sqlite3
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from dsfd.config.panel import REGIME_NAMES
+from dsfd.integrations.mqtt.messages import state_message
+from dsfd.integrations.mqtt.outbox import Outbox
+from tests.daemon.harness import DaemonProcess, query, run_dsfd, suwon_mapping
+from tests.integrations.bacnet_harness import (
+    DEVICE_INSTANCE,
+    BacnetClient,
+    bacnet_panel,
+    free_udp_port,
+    rpm_values,
+    run_args,
+)
+
+pytest.importorskip("bacpypes3", reason="needs the bacnet extra: pip install 'dsfd[bacnet]'")
+
+START = "2022-01-01T23:30:00Z"  # 08:30 in Suwon, January
+SPEED = 240.0
+#: Hang guard for a command's answer from the daemon [s].
+ANSWER_LIMIT_S = 60.0
+SENSORS = {1: "x1_c", 2: "x2_c", 3: "x3_c", 4: "x4_c", 5: "x5_c", 6: "v_cav_ms",
+           7: "t_out_c", 8: "ghi_wm2"}
+HEAT = {9: "q_sol_trans_w", 10: "q_cv_rd_w", 11: "q_air_w", 12: "q_da_w"}
+#: Units a BMS expects for each quantity (BACnetEngineeringUnits names).
+UNITS = {**{i: "degreesCelsius" for i in (1, 2, 3, 4, 5, 7)}, 6: "metersPerSecond",
+         8: "wattsPerSquareMeter", **{i: "watts" for i in HEAT}, 13: "milliseconds",
+         14: "seconds"}
+ALL_OBJECTS = [*(f"analog-input,{i}" for i in range(1, 16)), "analog-value,1",
+               "analog-value,2", "multi-state-value,1", "multi-state-value,2",
+               "binary-value,1", "characterstring-value,1"]
+DEVICE_REQUIRED = ["object-identifier", "object-name", "object-type", "system-status",
+                   "vendor-name", "vendor-identifier", "model-name", "firmware-revision",
+                   "application-software-version", "protocol-version", "protocol-revision",
+                   "protocol-services-supported", "object-list",
+                   "max-apdu-length-accepted", "segmentation-supported", "apdu-timeout",
+                   "number-of-apdu-retries", "device-address-binding", "database-revision"]
+
+
+def f32(x: float) -> float:
+    """A value as a BACnet REAL carries it (IEEE 754 single precision)."""
+    return float(np.float32(x))
+
+
+async def ask(client: BacnetClient, op: str, **fields: Any) -> dict[str, Any]:
+    return await asyncio.to_thread(client.ask, op, **fields)
+
+
+async def write(client: BacnetClient, obj: str, value: Any, **kw: Any) -> Any:
+    return await asyncio.to_thread(client.write, obj, value, **kw)
+
+
+def commands(db: Path) -> list[dict[str, Any]]:
+    cols = ("command_id", "kind", "args", "source", "requester", "requested_s", "status",
+            "reason", "cycle")
+    return [dict(zip(cols, r, strict=True)) for r in
+            query(db, f"SELECT {', '.join(cols)} FROM commands ORDER BY command_id")]
+
+
+async def answered(db: Path, count: int) -> list[dict[str, Any]]:
+    """Until ``count`` commands are in the table and none is pending."""
+    async with asyncio.timeout(ANSWER_LIMIT_S):
+        while True:
+            try:
+                rows = commands(db)
+            except sqlite3.OperationalError:  # busy for a moment
+                rows = []
+            if len(rows) >= count and all(r["status"] != "pending" for r in rows):
+                return rows
+            await asyncio.sleep(0.1)
+
+
+def no_exceptions(d: DaemonProcess) -> None:
+    bad = [r for r in d.records if "exception" in r or r.get("level") in ("error",
+                                                                         "critical")]
+    assert not bad, bad[:3]
+    assert "Traceback" not in d.stderr
+
+
+def test_who_is_and_a_read_of_every_object_match_the_database(tmp_path: Path) -> None:
+    port = free_udp_port()
+    panel = bacnet_panel(tmp_path / "panel.yaml", port=port)
+    state = tmp_path / "state"
+    db = state / "timeseries.sqlite"
+    client = BacnetClient(port)
+    seen: dict[str, Any] = {}
+
+    async def scenario() -> DaemonProcess:
+        d = await DaemonProcess(run_args(panel, state, start=START, cycles=2000,
+                                         speed=SPEED)).start()
+        await d.wait_cycle(40)  # past the first on-line calibration (min_window_h 0.5)
+        await asyncio.to_thread(client.start)
+        seen["who_is"] = await ask(client, "who-is")
+        seen["who_has"] = await ask(client, "who-has", name="louver angle")
+        props = ["object-name", "present-value", "status-flags", "out-of-service"]
+        seen["rpm"] = await ask(client, "rpm", objects=[
+            *([o, [*props, "units", "cov-increment"]] for o in ALL_OBJECTS if "analog" in o),
+            *([o, [*props, "state-text", "number-of-states"]] for o in ALL_OBJECTS
+              if "multi" in o),
+            *([o, props] for o in ALL_OBJECTS if "binary" in o or "string" in o),
+            [f"device,{DEVICE_INSTANCE}", DEVICE_REQUIRED]])
+        seen["read_only"] = await write(client, "analog-value,1", 36.0)
+        seen["objective_read_only"] = await write(client, "multi-state-value,2", 2,
+                                                  kind="unsigned", priority=None)
+        d.signal(signal.SIGTERM)
+        assert await d.wait_exit() == 0, d.stderr
+        return d
+
+    try:
+        d = asyncio.run(scenario())
+    finally:
+        assert client.stop() == ""
+    no_exceptions(d)
+    # Who-Is → I-Am, Who-Has → I-Have.
+    assert seen["who_is"]["i_am"] == [{"device": f"device,{DEVICE_INSTANCE}", "vendor": 999,
+                                       "source": f"127.0.0.1:{port}"}]
+    assert seen["who_has"]["i_have"] == [{"device": f"device,{DEVICE_INSTANCE}",
+                                          "object": "analogValue,1", "name": "louver angle"}]
+    got = rpm_values(seen["rpm"])
+    dev = f"device,{DEVICE_INSTANCE}"
+    assert all((dev, _camel(p)) in got for p in DEVICE_REQUIRED), sorted(got)
+    assert got[(dev, "objectName")] == "dsfd-suwon-south"
+    assert len(got[(dev, "objectList")]) == 2 + len(ALL_OBJECTS)  # + device, network port
+    # The cycle the device showed, and the database's values of that cycle.
+    cycle = int(got[("analogInput,15", "presentValue")])
+    ((time_s, phi, afr, or_pct, timings, objective),) = query(
+        db, "SELECT time_s, phi_deg, afr, or_pct, timings_ms, objective_mode FROM decisions "
+        "WHERE run_id = 1 AND cycle = ?", cycle)
+    samples = dict(query(db, "SELECT signal, value FROM samples WHERE run_id = 1 AND "
+                         "cycle = ? AND quality = 'good'", cycle))
+    model = dict(zip(HEAT.values(), query(db, f"SELECT {', '.join(HEAT.values())} FROM model "
+                                          "WHERE run_id = 1 AND cycle = ?", cycle)[0],
+                     strict=True))
+    (cal_s,) = query(db, "SELECT MAX(time_s) FROM parameters WHERE source = 'online' AND "
+                     "time_s <= ?", time_s)[0]
+    for i, signal_name in SENSORS.items():
+        assert got[(f"analogInput,{i}", "presentValue")] == f32(samples[signal_name]), i
+    for i, col in HEAT.items():
+        assert got[(f"analogInput,{i}", "presentValue")] == f32(model[col]), col
+    assert got[("analogInput,13", "presentValue")] == f32(json.loads(timings)["decide"])
+    assert cal_s is not None
+    assert got[("analogInput,14", "presentValue")] == f32(time_s - cal_s)
+    assert got[("analogValue,1", "presentValue")] == f32(phi)
+    assert got[("analogValue,2", "presentValue")] == f32(or_pct)
+    assert got[("multiStateValue,1", "presentValue")] == afr
+    assert got[("multiStateValue,1", "stateText")] == [REGIME_NAMES[r] for r in range(1, 11)]
+    assert got[("multiStateValue,2", "stateText")][got[("multiStateValue,2",
+                                                        "presentValue")] - 1] == objective
+    for o in ALL_OBJECTS:
+        key = _camel(o)
+        assert got[(key, "statusFlags")] == [0, 0, 0, 0], o  # no flag, no fault, in service
+        assert got[(key, "outOfService")] is False
+    for i, unit in UNITS.items():
+        assert got[(f"analogInput,{i}", "units")] == unit
+    assert (got[("analogValue,1", "units")], got[("analogValue,2", "units")]) == (
+        "degreesAngular", "percent")
+    doc = suwon_mapping()
+    assert got[("analogValue,1", "covIncrement")] == f32(doc["louver"]["step_deg"])
+    # The same cycle's MQTT state message (what the state topic carries).
+    outbox = Outbox.open(db, "test")
+    try:
+        (p,), _, _ = outbox.pending((1, cycle - 1), limit=1, max_age_s=1e12)
+        msg = state_message("suwon-south", p.row, p.samples, calibrated_s=p.calibrated_s)
+    finally:
+        outbox.close()
+    assert got[("characterstringValue,1", "presentValue")] == msg["set_by"]
+    assert got[("binaryValue,1", "presentValue")] == ("active" if msg["fault"] else "inactive")
+    assert got[("analogInput,7", "presentValue")] == f32(msg["measured"]["t_out_c"])
+    assert got[("analogInput,13", "presentValue")] == f32(msg["decision_ms"])
+    # Read-only: every write is refused and nothing is filed.
+    denied = {"error": "Error(write-property)", "errorClass": "property",
+              "errorCode": "writeAccessDenied"}
+    assert seen["read_only"] == denied
+    assert seen["objective_read_only"] == denied
+    assert commands(db) == []
+
+
+def _camel(name: str) -> str:
+    """``analog-input,1`` → ``analogInput,1`` (bacpypes3's attribute names)."""
+    head, _, rest = name.partition(",")
+    parts = head.split("-")
+    text = parts[0] + "".join(w.capitalize() for w in parts[1:])
+    text = text.replace("Characterstring", "characterstring")
+    return f"{text},{rest}" if rest else text
