@@ -31,7 +31,7 @@ import pytest
 from dsfd.config.panel import REGIME_NAMES
 from dsfd.integrations.mqtt.messages import state_message
 from dsfd.integrations.mqtt.outbox import Outbox
-from tests.daemon.harness import DaemonProcess, query, run_dsfd, suwon_mapping
+from tests.daemon.harness import DaemonProcess, query, suwon_mapping
 from tests.integrations.bacnet_harness import (
     DEVICE_INSTANCE,
     BacnetClient,
