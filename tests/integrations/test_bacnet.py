@@ -31,7 +31,7 @@ import pytest
 from dsfd.config.panel import REGIME_NAMES
 from dsfd.integrations.mqtt.messages import state_message
 from dsfd.integrations.mqtt.outbox import Outbox
-from tests.daemon.harness import DaemonProcess, query, suwon_mapping
+from tests.daemon.harness import DaemonProcess, query, run_dsfd, suwon_mapping
 from tests.integrations.bacnet_harness import (
     DEVICE_INSTANCE,
     BacnetClient,
@@ -210,3 +210,100 @@ def _camel(name: str) -> str:
     text = parts[0] + "".join(w.capitalize() for w in parts[1:])
     text = text.replace("Characterstring", "characterstring")
     return f"{text},{rest}" if rest else text
+
+
+def first_cycle_after(d: DaemonProcess, time_s: float) -> int:
+    return min(c for c in d.cycles_logged if d.cycle_ended_s(c) > time_s)
+
+
+def test_a_write_at_priority_8_holds_the_louver_and_relinquishing_it_resumes(
+        tmp_path: Path) -> None:
+    port = free_udp_port()
+    panel = bacnet_panel(tmp_path / "panel.yaml", port=port, writable=True)
+    state = tmp_path / "state"
+    db = state / "timeseries.sqlite"
+    client = BacnetClient(port)
+    seen: dict[str, Any] = {}
+
+    async def scenario() -> DaemonProcess:
+        d = await DaemonProcess(run_args(panel, state, start=START, cycles=2000,
+                                         speed=SPEED)).start()
+        await d.wait_cycle(3)
+        await asyncio.to_thread(client.start)
+        await ask(client, "cov", object="analog-input,15", process=1)
+        await ask(client, "cov", object="analog-value,1", process=2, confirmed=True)
+        await d.wait_cycle(d.cycles_logged[-1] + 2)
+        seen["write"] = await write(client, "analog-value,1", 36.0, priority=8)
+        (override,) = await answered(db, 1)
+        await d.wait_cycle(override["cycle"] + 2)
+        await asyncio.to_thread(client.wait_for, lambda c: 36.0 in c.cov_values(
+            "analog-value,1"))
+        seen["held"] = await ask(client, "rpm", objects=[["analog-value,1", [
+            "present-value", "priority-array", "current-command-priority",
+            "relinquish-default"]], ["characterstring-value,1", ["present-value"]]])
+        seen["status"] = await run_dsfd("status", "--config", str(panel), "--state-dir",
+                                        str(state))
+        seen["status_json"] = await run_dsfd("status", "--state-dir", str(state), "--json")
+        seen["relinquish"] = await write(client, "analog-value,1", None, kind="null",
+                                         priority=8)
+        resume = (await answered(db, 2))[1]
+        await d.wait_cycle(resume["cycle"] + 3)
+        seen["after"] = await ask(client, "rpm", objects=[["analog-value,1", [
+            "present-value", "priority-array", "current-command-priority"]]])
+        last = d.cycles_logged[-1]
+        await asyncio.to_thread(client.wait_for, lambda c: last in c.cov_values(
+            "analog-input,15"))
+        d.signal(signal.SIGTERM)
+        assert await d.wait_exit() == 0, d.stderr
+        await asyncio.to_thread(client.wait_for, lambda c: any(
+            f[3] == 1 for f in c.cov_values("analog-input,15", "status-flags")))
+        return d
+
+    try:
+        d = asyncio.run(scenario())
+    finally:
+        assert client.stop() == ""
+    no_exceptions(d)
+    override, resume = commands(db)
+    who = f"127.0.0.1:{client.bind_port} priority 8"
+    assert seen["write"] == "ack" and seen["relinquish"] == "ack"
+    # Filed as dsfd override / resume are, with the BACnet source address and priority.
+    assert (override["kind"], override["source"], override["requester"], override["status"]
+            ) == ("override", "bacnet", who, "applied")
+    assert json.loads(override["args"]) == {"louver_deg": 36.0}
+    assert (resume["kind"], resume["source"], resume["requester"], resume["status"]) == (
+        "resume", "bacnet", who, "applied")
+    # Held from the first cycle after the write (at the latest the one after).
+    assert override["cycle"] <= first_cycle_after(d, override["requested_s"]) + 1
+    assert resume["cycle"] <= first_cycle_after(d, resume["requested_s"]) + 1
+    rows = {c: (m, phi, src, cid) for c, m, phi, src, cid in query(
+        db, "SELECT cycle, method, phi_deg, hold_source, hold_command_id FROM decisions")}
+    for c in range(override["cycle"], resume["cycle"]):
+        assert rows[c] == ("manual", 36.0, "operator", override["command_id"]), c
+    assert rows[override["cycle"] - 1][2] is None
+    # Relinquished: the controller decides again.
+    for c in range(resume["cycle"], max(rows) + 1):
+        assert rows[c][0] in {"mpc", "rule"} and rows[c][2] is None, (c, rows[c])
+    held = rpm_values(seen["held"])
+    assert held[("analogValue,1", "presentValue")] == 36.0
+    assert held[("analogValue,1", "currentCommandPriority")] == 8
+    assert held[("analogValue,1", "priorityArray")] == [None] * 7 + [36.0] + [None] * 8
+    assert held[("characterstringValue,1", "presentValue")] == \
+        f"operator hold (bacnet {who})"
+    after = rpm_values(seen["after"])
+    assert after[("analogValue,1", "priorityArray")] == [None] * 16
+    assert after[("analogValue,1", "currentCommandPriority")] is None
+    # dsfd status names the BACnet requester.
+    rc, text, err = seen["status"]
+    assert rc == 0, err
+    assert f"hold:        operator by bacnet {who} until" in text
+    hold = json.loads(seen["status_json"][1])["hold"]
+    assert (hold["source"], hold["command_id"]) == ("operator", override["command_id"])
+    # COV: a notification for every stored cycle since the subscription, then the device
+    # goes out of service at the daemon's stop.
+    notified = [int(v) for v in client.cov_values("analog-input,15")]
+    stored = [c for (c,) in query(db, "SELECT cycle FROM decisions ORDER BY cycle")]
+    assert notified == sorted(notified)  # in order (the last one again: out of service)
+    assert set(stored) >= set(notified) >= {c for c in stored if c >= notified[0]}
+    assert client.cov_values("analog-input,15", "status-flags")[-1] == [0, 0, 0, 1]
+    assert 36.0 in client.cov_values("analog-value,1")

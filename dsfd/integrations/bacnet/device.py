@@ -154,6 +154,7 @@ class BacnetDevice:
                 self._wake.clear()
             await self._show_new(outbox)
             self._out_of_service()
+            log.info("BACnet device out of service: the daemon stops")
             await asyncio.sleep(NOTIFY_ON_STOP_S)
         finally:
             self.app.close()
@@ -192,10 +193,10 @@ class BacnetDevice:
 
     def _out_of_service(self) -> None:
         for obj in self.objects.values():
-            obj.outOfService = True
             flags = list(obj.statusFlags)
             flags[3] = 1
-            obj.statusFlags = flags
+            obj.statusFlags = flags  # first: COV detection watches the flags, and
+            obj.outOfService = True  # bacpypes3 sets the flag quietly with this one
 
     def _follow_daemon(self, conn: sqlite3.Connection, message: dict[str, Any]) -> None:
         """Relinquish every slot when the hold the arrays made is over."""
