@@ -307,3 +307,82 @@ def test_a_write_at_priority_8_holds_the_louver_and_relinquishing_it_resumes(
     assert set(stored) >= set(notified) >= {c for c in stored if c >= notified[0]}
     assert client.cov_values("analog-input,15", "status-flags")[-1] == [0, 0, 0, 1]
     assert 36.0 in client.cov_values("analog-value,1")
+
+
+def _error(code: str) -> dict[str, str]:
+    return {"error": "Error(write-property)", "errorClass": "property", "errorCode": code}
+
+
+#: (object, value, encoding, priority, the BACnet error code), for a panel with the louver
+#: limited to 72 deg on an 18 deg grid, dampers on 10 % steps and no exterior top damper.
+BAD_WRITES: tuple[tuple[str, Any, str, int | None, str], ...] = (
+    ("analog-value,1", 90.0, "real", 8, "valueOutOfRange"),      # beyond safety.phi_max_deg
+    ("analog-value,1", -1e30, "real", 8, "valueOutOfRange"),
+    ("analog-value,1", 37.0, "real", 8, "valueOutOfRange"),      # between motor steps
+    ("analog-value,1", float("nan"), "real", 8, "valueOutOfRange"),
+    ("analog-value,2", 35.0, "real", 8, "valueOutOfRange"),      # between damper steps
+    ("analog-value,2", 120.0, "real", 8, "valueOutOfRange"),
+    ("multi-state-value,1", 3, "unsigned", 8, "valueOutOfRange"),   # needs exterior top
+    ("multi-state-value,1", 11, "unsigned", 8, "valueOutOfRange"),  # no such state
+    ("multi-state-value,1", 0, "unsigned", 8, "valueOutOfRange"),
+    ("multi-state-value,2", 4, "unsigned", None, "valueOutOfRange"),  # objective 1..3
+    ("analog-value,1", "36", "string", 8, "invalidDataType"),
+    ("analog-value,1", 36, "unsigned", 8, "invalidDataType"),
+    ("multi-state-value,1", 7.0, "real", 8, "invalidDataType"),
+    ("multi-state-value,1", 7, "enumerated", 8, "invalidDataType"),
+    ("analog-value,1", 36.0, "real", 16, "writeAccessDenied"),  # the controller's priority
+    ("analog-value,1", 36.0, "real", None, "writeAccessDenied"),  # no priority means 16
+    ("analog-value,1", 36.0, "real", 0, "valueOutOfRange"),
+    ("analog-input,1", 20.0, "real", None, "writeAccessDenied"),  # a measurement
+    ("binary-value,1", 1, "enumerated", None, "writeAccessDenied"),
+    ("characterstring-value,1", "me", "string", None, "writeAccessDenied"),
+)
+
+
+def test_every_bad_write_gets_its_bacnet_error_and_changes_nothing(tmp_path: Path) -> None:
+    port = free_udp_port()
+    panel = bacnet_panel(tmp_path / "panel.yaml", port=port, writable=True, extra={
+        "safety": {"phi_max_deg": 72.0, "or_step_pct": 10.0},
+        "openings": {"exterior_top": None}})
+    state = tmp_path / "state"
+    db = state / "timeseries.sqlite"
+    client = BacnetClient(port)
+    seen: dict[str, Any] = {}
+    objects = [[o, ["present-value", "priority-array"]] for o in
+               ("analog-value,1", "analog-value,2", "multi-state-value,1")]
+
+    async def scenario() -> DaemonProcess:
+        d = await DaemonProcess(run_args(panel, state, start=START, cycles=2000,
+                                         speed=SPEED)).start()
+        await d.wait_cycle(3)
+        await asyncio.to_thread(client.start)
+        seen["first"] = d.cycles_logged[-1]
+        seen["answers"] = [await write(client, o, v, kind=k, priority=p)
+                           for o, v, k, p, _ in BAD_WRITES]
+        # A relinquish of a priority nobody wrote changes nothing either (and is no error).
+        seen["relinquish"] = await write(client, "analog-value,1", None, kind="null",
+                                         priority=9)
+        await d.wait_cycle(d.cycles_logged[-1] + 3)
+        seen["after"] = await ask(client, "rpm", objects=objects)
+        d.signal(signal.SIGTERM)
+        assert await d.wait_exit() == 0, d.stderr
+        return d
+
+    try:
+        d = asyncio.run(scenario())
+    finally:
+        assert client.stop() == ""
+    no_exceptions(d)
+    for (obj, value, kind, priority, code), answer in zip(BAD_WRITES, seen["answers"],
+                                                          strict=True):
+        assert answer == _error(code), (obj, value, kind, priority)
+    assert seen["relinquish"] == "ack"
+    assert commands(db) == []  # nothing filed
+    held = query(db, "SELECT cycle FROM decisions WHERE hold_source IS NOT NULL OR "
+                 "method = 'manual'")
+    assert held == []
+    after = rpm_values(seen["after"])
+    for o, _ in objects:
+        assert after[(_camel(o), "priorityArray")] == [None] * 16, o
+    refused = [r for r in d.records if r.get("event", "").startswith("BACnet write refused")]
+    assert len(refused) == sum(code != "invalidDataType" for *_, code in BAD_WRITES)
