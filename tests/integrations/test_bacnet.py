@@ -21,7 +21,9 @@ from __future__ import annotations
 import asyncio
 import json
 import signal
-import sqlite3
+import socket
+import time
+from collections.abc import Awaitable, Callable
 from pathlib import Path
 from typing import Any
 
@@ -29,9 +31,11 @@ import numpy as np
 import pytest
 
 from dsfd.config.panel import REGIME_NAMES
+from dsfd.integrations.bacnet.logs import LOGGED_PER_MINUTE
 from dsfd.integrations.mqtt.messages import state_message
 from dsfd.integrations.mqtt.outbox import Outbox
 from tests.daemon.harness import DaemonProcess, query, run_dsfd, suwon_mapping
+from tests.integrations.bacnet_fuzz import datagrams
 from tests.integrations.bacnet_harness import (
     DEVICE_INSTANCE,
     BacnetClient,
@@ -40,13 +44,12 @@ from tests.integrations.bacnet_harness import (
     rpm_values,
     run_args,
 )
+from tests.integrations.test_mqtt_commands import answered, commands
 
 pytest.importorskip("bacpypes3", reason="needs the bacnet extra: pip install 'dsfd[bacnet]'")
 
 START = "2022-01-01T23:30:00Z"  # 08:30 in Suwon, January
 SPEED = 240.0
-#: Hang guard for a command's answer from the daemon [s].
-ANSWER_LIMIT_S = 60.0
 SENSORS = {1: "x1_c", 2: "x2_c", 3: "x3_c", 4: "x4_c", 5: "x5_c", 6: "v_cav_ms",
            7: "t_out_c", 8: "ghi_wm2"}
 HEAT = {9: "q_sol_trans_w", 10: "q_cv_rd_w", 11: "q_air_w", 12: "q_da_w"}
@@ -78,24 +81,41 @@ async def write(client: BacnetClient, obj: str, value: Any, **kw: Any) -> Any:
     return await asyncio.to_thread(client.write, obj, value, **kw)
 
 
-def commands(db: Path) -> list[dict[str, Any]]:
-    cols = ("command_id", "kind", "args", "source", "requester", "requested_s", "status",
-            "reason", "cycle")
-    return [dict(zip(cols, r, strict=True)) for r in
-            query(db, f"SELECT {', '.join(cols)} FROM commands ORDER BY command_id")]
+def setup(tmp_path: Path, *, writable: bool, extra: dict[str, Any] | None = None
+          ) -> tuple[int, Path, Path, Path, BacnetClient]:
+    """Device port, panel file, state directory, database and a client (not started)."""
+    port = free_udp_port()
+    panel = bacnet_panel(tmp_path / "panel.yaml", port=port, writable=writable, extra=extra)
+    state = tmp_path / "state"
+    return port, panel, state, state / "timeseries.sqlite", BacnetClient(port)
 
 
-async def answered(db: Path, count: int) -> list[dict[str, Any]]:
-    """Until ``count`` commands are in the table and none is pending."""
-    async with asyncio.timeout(ANSWER_LIMIT_S):
-        while True:
-            try:
-                rows = commands(db)
-            except sqlite3.OperationalError:  # busy for a moment
-                rows = []
-            if len(rows) >= count and all(r["status"] != "pending" for r in rows):
-                return rows
-            await asyncio.sleep(0.1)
+def run_with_client(panel: Path, state: Path, client: BacnetClient,
+                    body: Callable[[DaemonProcess], Awaitable[None]], *,
+                    first_cycle: int = 3, speed: float = SPEED,
+                    after_stop: Callable[[DaemonProcess], Awaitable[None]] | None = None
+                    ) -> DaemonProcess:
+    """Run the daemon, start the client at ``first_cycle``, run ``body``, stop the daemon
+    with SIGTERM (then ``after_stop``), stop the client; the daemon logged no exception."""
+
+    async def scenario() -> DaemonProcess:
+        d = await DaemonProcess(run_args(panel, state, start=START, cycles=2000,
+                                         speed=speed)).start()
+        await d.wait_cycle(first_cycle)
+        await asyncio.to_thread(client.start)
+        await body(d)
+        d.signal(signal.SIGTERM)
+        assert await d.wait_exit() == 0, d.stderr
+        if after_stop is not None:
+            await after_stop(d)
+        return d
+
+    try:
+        d = asyncio.run(scenario())
+    finally:
+        assert client.stop() == ""
+    no_exceptions(d)
+    return d
 
 
 def no_exceptions(d: DaemonProcess) -> None:
@@ -106,18 +126,10 @@ def no_exceptions(d: DaemonProcess) -> None:
 
 
 def test_who_is_and_a_read_of_every_object_match_the_database(tmp_path: Path) -> None:
-    port = free_udp_port()
-    panel = bacnet_panel(tmp_path / "panel.yaml", port=port)
-    state = tmp_path / "state"
-    db = state / "timeseries.sqlite"
-    client = BacnetClient(port)
+    port, panel, state, db, client = setup(tmp_path, writable=False)
     seen: dict[str, Any] = {}
 
-    async def scenario() -> DaemonProcess:
-        d = await DaemonProcess(run_args(panel, state, start=START, cycles=2000,
-                                         speed=SPEED)).start()
-        await d.wait_cycle(40)  # past the first on-line calibration (min_window_h 0.5)
-        await asyncio.to_thread(client.start)
+    async def body(d: DaemonProcess) -> None:
         seen["who_is"] = await ask(client, "who-is")
         seen["who_has"] = await ask(client, "who-has", name="louver angle")
         props = ["object-name", "present-value", "status-flags", "out-of-service"]
@@ -130,15 +142,8 @@ def test_who_is_and_a_read_of_every_object_match_the_database(tmp_path: Path) ->
         seen["read_only"] = await write(client, "analog-value,1", 36.0)
         seen["objective_read_only"] = await write(client, "multi-state-value,2", 2,
                                                   kind="unsigned", priority=None)
-        d.signal(signal.SIGTERM)
-        assert await d.wait_exit() == 0, d.stderr
-        return d
 
-    try:
-        d = asyncio.run(scenario())
-    finally:
-        assert client.stop() == ""
-    no_exceptions(d)
+    run_with_client(panel, state, client, body, first_cycle=40)  # after a calibration
     # Who-Is → I-Am, Who-Has → I-Have.
     assert seen["who_is"]["i_am"] == [{"device": f"device,{DEVICE_INSTANCE}", "vendor": 999,
                                        "source": f"127.0.0.1:{port}"}]
@@ -218,18 +223,10 @@ def first_cycle_after(d: DaemonProcess, time_s: float) -> int:
 
 def test_a_write_at_priority_8_holds_the_louver_and_relinquishing_it_resumes(
         tmp_path: Path) -> None:
-    port = free_udp_port()
-    panel = bacnet_panel(tmp_path / "panel.yaml", port=port, writable=True)
-    state = tmp_path / "state"
-    db = state / "timeseries.sqlite"
-    client = BacnetClient(port)
+    _, panel, state, db, client = setup(tmp_path, writable=True)
     seen: dict[str, Any] = {}
 
-    async def scenario() -> DaemonProcess:
-        d = await DaemonProcess(run_args(panel, state, start=START, cycles=2000,
-                                         speed=SPEED)).start()
-        await d.wait_cycle(3)
-        await asyncio.to_thread(client.start)
+    async def body(d: DaemonProcess) -> None:
         await ask(client, "cov", object="analog-input,15", process=1)
         await ask(client, "cov", object="analog-value,1", process=2, confirmed=True)
         await d.wait_cycle(d.cycles_logged[-1] + 2)
@@ -253,17 +250,12 @@ def test_a_write_at_priority_8_holds_the_louver_and_relinquishing_it_resumes(
         last = d.cycles_logged[-1]
         await asyncio.to_thread(client.wait_for, lambda c: last in c.cov_values(
             "analog-input,15"))
-        d.signal(signal.SIGTERM)
-        assert await d.wait_exit() == 0, d.stderr
+
+    async def after_stop(d: DaemonProcess) -> None:
         await asyncio.to_thread(client.wait_for, lambda c: any(
             f[3] == 1 for f in c.cov_values("analog-input,15", "status-flags")))
-        return d
 
-    try:
-        d = asyncio.run(scenario())
-    finally:
-        assert client.stop() == ""
-    no_exceptions(d)
+    d = run_with_client(panel, state, client, body, after_stop=after_stop)
     override, resume = commands(db)
     who = f"127.0.0.1:{client.bind_port} priority 8"
     assert seen["write"] == "ack" and seen["relinquish"] == "ack"
@@ -340,22 +332,14 @@ BAD_WRITES: tuple[tuple[str, Any, str, int | None, str], ...] = (
 
 
 def test_every_bad_write_gets_its_bacnet_error_and_changes_nothing(tmp_path: Path) -> None:
-    port = free_udp_port()
-    panel = bacnet_panel(tmp_path / "panel.yaml", port=port, writable=True, extra={
+    _, panel, state, db, client = setup(tmp_path, writable=True, extra={
         "safety": {"phi_max_deg": 72.0, "or_step_pct": 10.0},
         "openings": {"exterior_top": None}})
-    state = tmp_path / "state"
-    db = state / "timeseries.sqlite"
-    client = BacnetClient(port)
     seen: dict[str, Any] = {}
     objects = [[o, ["present-value", "priority-array"]] for o in
                ("analog-value,1", "analog-value,2", "multi-state-value,1")]
 
-    async def scenario() -> DaemonProcess:
-        d = await DaemonProcess(run_args(panel, state, start=START, cycles=2000,
-                                         speed=SPEED)).start()
-        await d.wait_cycle(3)
-        await asyncio.to_thread(client.start)
+    async def body(d: DaemonProcess) -> None:
         seen["first"] = d.cycles_logged[-1]
         seen["answers"] = [await write(client, o, v, kind=k, priority=p)
                            for o, v, k, p, _ in BAD_WRITES]
@@ -364,15 +348,8 @@ def test_every_bad_write_gets_its_bacnet_error_and_changes_nothing(tmp_path: Pat
                                          priority=9)
         await d.wait_cycle(d.cycles_logged[-1] + 3)
         seen["after"] = await ask(client, "rpm", objects=objects)
-        d.signal(signal.SIGTERM)
-        assert await d.wait_exit() == 0, d.stderr
-        return d
 
-    try:
-        d = asyncio.run(scenario())
-    finally:
-        assert client.stop() == ""
-    no_exceptions(d)
+    d = run_with_client(panel, state, client, body)
     for (obj, value, kind, priority, code), answer in zip(BAD_WRITES, seen["answers"],
                                                           strict=True):
         assert answer == _error(code), (obj, value, kind, priority)
@@ -386,3 +363,52 @@ def test_every_bad_write_gets_its_bacnet_error_and_changes_nothing(tmp_path: Pat
         assert after[(_camel(o), "priorityArray")] == [None] * 16, o
     refused = [r for r in d.records if r.get("event", "").startswith("BACnet write refused")]
     assert len(refused) == sum(code != "invalidDataType" for *_, code in BAD_WRITES)
+
+
+FUZZ_COUNT = 2000
+
+
+def test_the_daemon_survives_2000_malformed_datagrams_without_missing_a_cycle(
+        tmp_path: Path) -> None:
+    port, panel, state, db, client = setup(tmp_path, writable=True)
+    seen: dict[str, Any] = {}
+    packets = datagrams(FUZZ_COUNT, seed=37)
+
+    def fuzz() -> int:
+        """Send every datagram (about 400 a second), reading whatever comes back."""
+        answers = 0
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+            s.bind(("127.0.0.1", 0))
+            s.setblocking(False)
+            for i, data in enumerate(packets):
+                s.sendto(data, ("127.0.0.1", port))
+                if i % 20 == 19:
+                    time.sleep(0.05)
+                while True:
+                    try:
+                        s.recv(65536)
+                    except BlockingIOError:
+                        break
+                    answers += 1
+        return answers
+
+    async def body(d: DaemonProcess) -> None:
+        seen["answers"] = await asyncio.to_thread(fuzz)
+        await d.wait_cycle(d.cycles_logged[-1] + 2)
+        seen["who_is"] = await ask(client, "who-is")
+        seen["rpm"] = await ask(client, "rpm", objects=[["analog-input,15", [
+            "present-value"]]])
+
+    d = run_with_client(panel, state, client, body)
+    assert seen["answers"] > 0  # confirmed requests were answered (errors, rejects)
+    assert [a["device"] for a in seen["who_is"]["i_am"]] == [f"device,{DEVICE_INSTANCE}"]
+    assert rpm_values(seen["rpm"])[("analogInput,15", "presentValue")] >= 3
+    cycles = [c for (c,) in query(db, "SELECT cycle FROM decisions ORDER BY cycle")]
+    assert cycles == list(range(1, len(cycles) + 1))
+    assert query(db, "SELECT SUM(skipped_slots) FROM decisions") == [(0,)]
+    assert commands(db) == []
+    assert not d.events("cycle overran")
+    # Logged without tracebacks, a few a minute, the rest counted.
+    assert 0 < len(d.events("BACnet datagram dropped")) <= LOGGED_PER_MINUTE
+    assert any("more BACnet datagram(s) dropped" in r["event"]
+                                for r in d.records)

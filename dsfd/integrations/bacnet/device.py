@@ -46,6 +46,7 @@ from dsfd.integrations.bacnet.commands import (
     objective_request,
     validated,
 )
+from dsfd.integrations.bacnet.logs import BacpypesLogs
 from dsfd.integrations.bacnet.points import Point, point_values, points_for
 from dsfd.integrations.mqtt.messages import state_message
 from dsfd.integrations.mqtt.outbox import Key, Outbox
@@ -89,6 +90,7 @@ class BacnetDevice:
         #: Counts for the log and the tests.
         self.cycles_shown = self.writes_accepted = self.writes_refused = 0
         self.failed: str | None = None
+        self.logs = BacpypesLogs()
 
     # ------------------------------------------------------------------ the runner's hooks
     def start(self, *, database: Path) -> None:
@@ -115,7 +117,8 @@ class BacnetDevice:
 
     def health(self) -> dict[str, Any]:
         return {"cycles_shown": self.cycles_shown, "writes_accepted": self.writes_accepted,
-                "writes_refused": self.writes_refused, "failed": self.failed}
+                "writes_refused": self.writes_refused, "datagrams_dropped": self.logs.dropped,
+                "failed": self.failed}
 
     # ------------------------------------------------------------------ the thread
     def _run(self) -> None:
@@ -128,37 +131,44 @@ class BacnetDevice:
             self._ready.set()
 
     async def _main(self) -> None:
-        from dsfd.integrations.bacnet.build import build_application
-
         self._loop = asyncio.get_running_loop()
         self._wake = asyncio.Event()
         assert self.database is not None
+        self.logs.install()
         outbox = Outbox.open(self.database, "bacnet")
+        try:
+            await self._serve(outbox)
+        finally:
+            if self.app is not None:
+                self.app.close()
+            outbox.close()
+            self.logs.remove()
+
+    async def _serve(self, outbox: Outbox) -> None:
+        from dsfd.integrations.bacnet.build import build_application
+
         self.app, self.objects = build_application(self.cfg, self.points, version=self.version)
         self.app.write_handler = self.write
         s = self.settings
         log.info("BACnet device listening", device=f"device,{s.device_instance}",
                  address=s.bind_address(), writable=s.writable,
                  foreign_device=None if s.foreign_device is None else s.foreign_device.bbmd)
-        try:
-            newest = outbox.conn.execute(
-                "SELECT run_id, cycle FROM decisions ORDER BY run_id DESC, cycle DESC "
-                "LIMIT 1 OFFSET 1").fetchone()
-            self._after = (0, 0) if newest is None else (int(newest[0]), int(newest[1]))
-            self._ready.set()
-            while not self._stop.is_set():
-                await self._show_new(outbox)
-                with contextlib.suppress(TimeoutError):
-                    async with asyncio.timeout(IDLE_POLL_S):
-                        await self._wake.wait()
-                self._wake.clear()
+        newest = outbox.conn.execute(
+            "SELECT run_id, cycle FROM decisions ORDER BY run_id DESC, cycle DESC "
+            "LIMIT 1 OFFSET 1").fetchone()
+        self._after = (0, 0) if newest is None else (int(newest[0]), int(newest[1]))
+        self._ready.set()
+        assert self._wake is not None
+        while not self._stop.is_set():
             await self._show_new(outbox)
-            self._out_of_service()
-            log.info("BACnet device out of service: the daemon stops")
-            await asyncio.sleep(NOTIFY_ON_STOP_S)
-        finally:
-            self.app.close()
-            outbox.close()
+            with contextlib.suppress(TimeoutError):
+                async with asyncio.timeout(IDLE_POLL_S):
+                    await self._wake.wait()
+            self._wake.clear()
+        await self._show_new(outbox)
+        self._out_of_service()
+        log.info("BACnet device out of service: the daemon stops")
+        await asyncio.sleep(NOTIFY_ON_STOP_S)
 
     async def _show_new(self, outbox: Outbox) -> None:
         """Show the cycles stored since the last look, one at a time."""
