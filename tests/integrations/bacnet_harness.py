@@ -56,6 +56,7 @@ class BacnetClient:
     :attr:`transcript` (requests as ``>``, answers as ``<``)."""
 
     def __init__(self, device_port: int, *, bind_port: int | None = None) -> None:
+        self.device_port = device_port
         self.bind_port = bind_port or free_udp_port()
         self.cmd = [sys.executable, str(CLIENT), "--bind", f"127.0.0.1:{self.bind_port}",
                     "--device", f"127.0.0.1:{device_port}"]
@@ -109,10 +110,14 @@ class BacnetClient:
         return self.ask("write", object=obj, value=value, priority=priority,
                         type=kind)["answer"]
 
-    def cov_values(self, obj: str, prop: str = "present-value") -> list[Any]:
+    def cov_values(self, obj: str, prop: str = "present-value", *,
+                   process: int | None = None) -> list[Any]:
+        """Values notified for one object's property (``process``: of that
+        SubscribeCOVProperty subscription; None: of the SubscribeCOV ones)."""
         with self._lock:
             return [n["value"] for n in self.notifications
-                    if n["cov"] == obj and n["property"] == prop]
+                    if n["cov"] == obj and n["property"] == prop
+                    and n.get("process") == process]
 
     def wait_for(self, predicate: Callable[[BacnetClient], bool], *,
                  limit_s: float = ANSWER_LIMIT_S) -> None:

@@ -19,6 +19,7 @@ guards.
 from __future__ import annotations
 
 import asyncio
+import itertools
 import json
 import signal
 import socket
@@ -35,7 +36,14 @@ from dsfd.integrations.bacnet.logs import LOGGED_PER_MINUTE
 from dsfd.integrations.mqtt.messages import state_message
 from dsfd.integrations.mqtt.outbox import Outbox
 from tests.daemon.harness import DaemonProcess, query, run_dsfd, suwon_mapping
-from tests.integrations.bacnet_fuzz import datagrams
+from tests.integrations.bacnet_fuzz import (
+    SUBSCRIBE_COV_PROPERTY,
+    bvll,
+    confirmed,
+    datagrams,
+    npdu,
+    object_id,
+)
 from tests.integrations.bacnet_harness import (
     DEVICE_INSTANCE,
     BacnetClient,
@@ -229,6 +237,11 @@ def test_a_write_at_priority_8_holds_the_louver_and_relinquishing_it_resumes(
     async def body(d: DaemonProcess) -> None:
         await ask(client, "cov", object="analog-input,15", process=1)
         await ask(client, "cov", object="analog-value,1", process=2, confirmed=True)
+        seen["cov_property"] = [
+            await ask(client, "cov-property", object="analog-value,1", process=3),
+            await ask(client, "cov-property", object="analog-input,1", increment=0.5,
+                      process=4, confirmed=True),
+            await ask(client, "cov-property", object="characterstring-value,1", process=5)]
         await d.wait_cycle(d.cycles_logged[-1] + 2)
         seen["write"] = await write(client, "analog-value,1", 36.0, priority=8)
         (override,) = await answered(db, 1)
@@ -299,6 +312,17 @@ def test_a_write_at_priority_8_holds_the_louver_and_relinquishing_it_resumes(
     assert set(stored) >= set(notified) >= {c for c in stored if c >= notified[0]}
     assert client.cov_values("analog-input,15", "status-flags")[-1] == [0, 0, 0, 1]
     assert 36.0 in client.cov_values("analog-value,1")
+    # SubscribeCOVProperty: the louver with its object's increment (one motor step), x1
+    # with the subscriber's 0.5 K, the set-by text at any change.
+    assert [a["answer"] for a in seen["cov_property"]] == ["ack"] * 3
+    louver = client.cov_values("analog-value,1", process=3)
+    assert 36.0 in louver
+    assert all(abs(b - a) >= 18.0 for a, b in itertools.pairwise(louver))
+    x1 = client.cov_values("analog-input,1", process=4)
+    assert len(x1) >= 2
+    assert all(abs(b - a) >= f32(0.5) - 1e-6 for a, b in itertools.pairwise(x1))
+    texts = client.cov_values("characterstring-value,1", process=5)
+    assert f"operator hold (bacnet {who})" in texts and texts[-1] in {"mpc", "rule"}
 
 
 def _error(code: str) -> dict[str, str]:
@@ -331,6 +355,24 @@ BAD_WRITES: tuple[tuple[str, Any, str, int | None, str], ...] = (
 )
 
 
+def raw_subscriptions(port: int) -> list[bytes]:
+    """Two SubscribeCOVProperty requests from a raw socket (an object the device lacks, a
+    property its object lacks); the APDUs of the answers."""
+    requests = [
+        bvll(npdu(confirmed(SUBSCRIBE_COV_PROPERTY, b"\x09\x0b\x1c" + object_id(0, 99)
+                            + b"\x29\x00\x39\x3c\x4e\x09\x55\x4f", 1))),
+        bvll(npdu(confirmed(SUBSCRIBE_COV_PROPERTY, b"\x09\x0b\x1c" + object_id(0, 1)
+                            + b"\x29\x00\x39\x3c\x4e\x09\x57\x4f", 2)))]  # 87: priority
+    out = []
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        s.settimeout(10.0)
+        for data in requests:
+            s.sendto(data, ("127.0.0.1", port))
+            out.append(s.recv(1500)[6:])  # past the BVLL (4) and NPDU (2) headers
+    return out
+
+
 def test_every_bad_write_gets_its_bacnet_error_and_changes_nothing(tmp_path: Path) -> None:
     _, panel, state, db, client = setup(tmp_path, writable=True, extra={
         "safety": {"phi_max_deg": 72.0, "or_step_pct": 10.0},
@@ -346,6 +388,7 @@ def test_every_bad_write_gets_its_bacnet_error_and_changes_nothing(tmp_path: Pat
         # A relinquish of a priority nobody wrote changes nothing either (and is no error).
         seen["relinquish"] = await write(client, "analog-value,1", None, kind="null",
                                          priority=9)
+        seen["raw"] = await asyncio.to_thread(raw_subscriptions, client.device_port)
         await d.wait_cycle(d.cycles_logged[-1] + 3)
         seen["after"] = await ask(client, "rpm", objects=objects)
 
@@ -361,6 +404,10 @@ def test_every_bad_write_gets_its_bacnet_error_and_changes_nothing(tmp_path: Pat
     after = rpm_values(seen["after"])
     for o, _ in objects:
         assert after[(_camel(o), "priorityArray")] == [None] * 16, o
+    # SubscribeCOVProperty of an object or property the device lacks: Error PDUs (clause
+    # 20.1.7) naming object / unknown-object (31) and property / unknown-property (32).
+    assert seen["raw"] == [bytes([0x50, 1, 28, 0x91, 1, 0x91, 31]),
+                           bytes([0x50, 2, 28, 0x91, 2, 0x91, 32])]
     refused = [r for r in d.records if r.get("event", "").startswith("BACnet write refused")]
     assert len(refused) == sum(code != "invalidDataType" for *_, code in BAD_WRITES)
 

@@ -37,6 +37,8 @@ from bacpypes3.local.object import Object as LocalObject
 from bacpypes3.object import CharacterStringValueObject
 from bacpypes3.primitivedata import Null, Unsigned
 
+from dsfd.integrations.bacnet.covproperty import CovPropertyServices
+
 __all__ = ["CommandableAV", "CommandableMSV", "PanelApplication", "ReadOnlyAI", "ReadOnlyAV",
            "ReadOnlyBV", "ReadOnlyCSV", "ReadOnlyMSV", "WriteHandler", "refusal",
            "set_present_value", "set_slot"]
@@ -116,9 +118,9 @@ def set_slot(obj: Any, priority: int, value: Any) -> None:
     obj.priorityArray[priority - 1] = PriorityValue(kind(kind.cast(value)))
 
 
-class PanelApplication(Application):
+class PanelApplication(CovPropertyServices, Application):
     """bacpypes3's application (Who-Is, Who-Has, ReadProperty(Multiple), SubscribeCOV) with
-    WriteProperty handed to the panel device."""
+    SubscribeCOVProperty added and WriteProperty handed to the panel device."""
 
     write_handler: WriteHandler | None = None
 
