@@ -54,6 +54,16 @@ def _bench_mqtt(args: argparse.Namespace) -> dict[str, float]:
                       backlog=args.backlog or DEFAULT_BACKLOG, seed=args.seed)
 
 
+def _bench_bacnet(args: argparse.Namespace) -> dict[str, float]:
+    from dsfd.integrations.bacnet import require_bacpypes3
+
+    require_bacpypes3()
+    from dsfd.bench.bacnet import DEFAULT_CYCLES, DEFAULT_READS, bench_bacnet
+
+    return bench_bacnet(args.config, cycles=args.cycles or DEFAULT_CYCLES,
+                        reads=args.reads or DEFAULT_READS, seed=args.seed)
+
+
 def _bench_calibration(args: argparse.Namespace) -> dict[str, float]:
     from dsfd.bench.calibration import bench_calibration
 
@@ -126,6 +136,7 @@ TARGETS: dict[str, Callable[[argparse.Namespace], dict[str, float]]] = {
     "plant-velocity": _bench_plant_velocity,
     "daemon": _bench_daemon,
     "mqtt": _bench_mqtt,
+    "bacnet": _bench_bacnet,
     "calibration": _bench_calibration,
     "paper-tables": _bench_paper_tables,
     "closed-loop": _bench_closed_loop,
@@ -153,7 +164,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "10); paper-tables: run seeds 0..N-1 and print the per-seed cavity-speed "
                    "table")
     p.add_argument("--cycles", type=int, default=None,
-                   help="mqtt: daemon cycles whose publish latency is measured (default 200)")
+                   help="mqtt, bacnet: daemon cycles whose publish / COV latency is measured "
+                   "(default 200)")
+    p.add_argument("--reads", type=int, default=None,
+                   help="bacnet: ReadPropertyMultiple requests timed (default 500)")
     p.add_argument("--backlog", type=int, default=None,
                    help="mqtt: stored cycles drained after an outage (default 5000)")
     p.add_argument("--weather", default=None, help="weather file or bundled name")
@@ -181,7 +195,7 @@ def _write_json(path: Path, target: str, figures: dict[str, float]) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    for name in ("days", "cycles", "backlog"):
+    for name in ("days", "cycles", "backlog", "reads"):
         value = getattr(args, name)
         if value is not None and not value > 0:
             print(f"dsfd bench: --{name} {value}: must be positive", file=sys.stderr)

@@ -1,5 +1,6 @@
 """The BACnet tests' pieces: a panel file with a ``bacnet:`` section on loopback, the daemon's
-run arguments, and the third-party client (``bacnet_client.py``) as a process of its own.
+run arguments, and the third-party client (:mod:`dsfd.bench.bacnet_client`) as a process of
+its own.
 
 The device binds 127.0.0.1 on a free UDP port; the client binds 127.0.0.1 on another one.
 BACnet/IP broadcasts go to the sender's own port on the subnet's broadcast address, so two
@@ -23,7 +24,6 @@ from typing import Any
 
 from tests.daemon.harness import ROOT, write_panel
 
-CLIENT = Path(__file__).with_name("bacnet_client.py")
 #: Hang guard for one answer of the client [s].
 ANSWER_LIMIT_S = 30.0
 DEVICE_INSTANCE = 41001
@@ -58,7 +58,8 @@ class BacnetClient:
     def __init__(self, device_port: int, *, bind_port: int | None = None) -> None:
         self.device_port = device_port
         self.bind_port = bind_port or free_udp_port()
-        self.cmd = [sys.executable, str(CLIENT), "--bind", f"127.0.0.1:{self.bind_port}",
+        self.cmd = [sys.executable, "-m", "dsfd.bench.bacnet_client", "--bind",
+                    f"127.0.0.1:{self.bind_port}",
                     "--device", f"127.0.0.1:{device_port}"]
         self.proc: subprocess.Popen[str] | None = None
         self.answers: queue.Queue[dict[str, Any]] = queue.Queue()

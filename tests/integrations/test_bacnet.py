@@ -1,6 +1,6 @@
 """BACnet/IP end to end: a third-party client (bacpypes3's client side, in a process of its
-own, ``bacnet_client.py``) → UDP on loopback → the real ``dsfd run`` (simulated plant, dry
-run) with a ``bacnet:`` section → its database, ``dsfd status``.
+own, :mod:`dsfd.bench.bacnet_client`) → UDP on loopback → the real ``dsfd run`` (simulated
+plant, dry run) with a ``bacnet:`` section → its database, ``dsfd status``.
 
 * Who-Is is answered by an I-Am, Who-Has by an I-Have; a ReadPropertyMultiple of every
   object returns the values the database holds for the cycle the "stored cycle" point names

@@ -1,7 +1,8 @@
 """A third-party BACnet client in a process of its own: bacpypes3's client side, driven by
 JSON lines on stdin, answering with JSON lines on stdout (the transcript of the exchange).
+The BACnet tests and ``dsfd bench bacnet`` run it against the daemon's device:
 
-    python tests/integrations/bacnet_client.py --bind 127.0.0.1:47810 --device 127.0.0.1:47809
+    python -m dsfd.bench.bacnet_client --bind 127.0.0.1:47810 --device 127.0.0.1:47809
 
 Requests (one JSON object per line), each answered by one line with the same ``id``:
 
@@ -19,7 +20,12 @@ Requests (one JSON object per line), each answered by one line with the same ``i
 * ``{"op": "cov-property", "object": ..., "property": "present-value", "increment": 0.5,
   "process": 9}`` — SubscribeCOVProperty (bacpypes3 has no client helper for it: the
   request is sent as it is and the notifications for that process are printed as above);
+* ``{"op": "rpm-bench", "count": 500, "objects": [...]}`` — that many
+  ReadPropertyMultiple requests one after the other; the elapsed time;
 * ``{"op": "quit"}``.
+
+Notification lines carry ``received_s`` (wall clock) and ``received_mono_s`` (the host's
+monotonic clock, CLOCK_MONOTONIC, the same in every process of the machine).
 
 Only bacpypes3's client API is used (``Application.from_args``, ``who_is``, ``who_has``,
 ``read_property``, ``read_property_multiple``, ``change_of_value``, ``request`` with its
@@ -55,6 +61,8 @@ from bacpypes3.primitivedata import (
     Unsigned,
 )
 from bacpypes3.vendor import get_vendor_info
+
+__all__ = ["Client", "ClientApplication", "main", "plain"]
 
 
 def plain(value: Any) -> Any:
@@ -127,6 +135,14 @@ class Client:
             self.subscriptions.append(asyncio.create_task(self._cov(req)))
             await asyncio.sleep(0.2)
             return {"subscribed": req["object"]}
+        if op == "rpm-bench":
+            args = [x for obj, props in req["objects"] for x in (obj, props)]
+            start = time.monotonic()
+            for _ in range(int(req["count"])):
+                result = await self.app.read_property_multiple(self.device, list(args))
+                if isinstance(result, ErrorRejectAbortNack):
+                    return {"values": plain(result)}
+            return {"count": int(req["count"]), "elapsed_s": time.monotonic() - start}
         if op == "cov-property":
             return {"answer": await self._cov_property(req)}
         raise ValueError(f"unknown op {op!r}")
@@ -174,7 +190,8 @@ class Client:
             while True:
                 prop, value = await scm.get_value()
                 emit({"cov": req["object"], "property": str(prop), "value": plain(value),
-                      "received_s": time.time()})
+                      "received_s": time.time(),
+                      "received_mono_s": time.monotonic()})
 
 
 class ClientApplication(Application):
@@ -193,7 +210,8 @@ class ClientApplication(Application):
             prop = pv.propertyIdentifier
             value = pv.value.cast_out(object_class.get_property_type(prop))
             emit({"cov": name, "property": str(prop), "value": plain(value),
-                  "received_s": time.time(), "process": int(apdu.subscriberProcessIdentifier)})
+                  "received_s": time.time(), "received_mono_s": time.monotonic(),
+                  "process": int(apdu.subscriberProcessIdentifier)})
         return True
 
     async def do_UnconfirmedCOVNotificationRequest(self, apdu: Any) -> None:
