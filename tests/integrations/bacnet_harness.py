@@ -35,13 +35,17 @@ def free_udp_port() -> int:
         return int(s.getsockname()[1])
 
 
+def bacnet_section(port: int, *, writable: bool, **more: Any) -> dict[str, Any]:
+    """A ``bacnet:`` section: the device on 127.0.0.1:``port``."""
+    return {"device_instance": DEVICE_INSTANCE, "address": "127.0.0.1", "port": port,
+            "writable": writable, **more}
+
+
 def bacnet_panel(path: Path, *, port: int, writable: bool = False,
-                 bacnet: Mapping[str, Any] | None = None,
                  extra: Mapping[str, Any] | None = None) -> Path:
     """A simulation panel file whose BACnet device listens on 127.0.0.1:``port``."""
-    section = {"device_instance": DEVICE_INSTANCE, "address": "127.0.0.1", "port": port,
-               "writable": writable, **(bacnet or {})}
-    return write_panel(path, devices=False, extra={"bacnet": section, **(extra or {})})
+    return write_panel(path, devices=False, extra={
+        "bacnet": bacnet_section(port, writable=writable), **(extra or {})})
 
 
 def run_args(panel: Path, state: Path, *, start: str, cycles: int, speed: float) -> list[str]:

@@ -4,8 +4,9 @@ plant, dry run) with a ``bacnet:`` section → its database, ``dsfd status``.
 
 * Who-Is is answered by an I-Am, Who-Has by an I-Have; a ReadPropertyMultiple of every
   object returns the values the database holds for the cycle the "stored cycle" point names
-  (samples, decision, model rows, queried here independently) and the MQTT state message
-  of that cycle; a read-only device refuses writes (write-access-denied) and files nothing.
+  (samples, decision, model rows, queried here independently) and the state message of that
+  cycle on the MQTT state topic (a real Mosquitto, mosquitto_sub); a read-only device
+  refuses writes (write-access-denied) and files nothing.
 * A write of the louver at priority 8 is an operator hold from the next cycle; ``dsfd
   status`` names the BACnet requester; relinquishing it ends the hold and the controller
   decides again; a COV subscriber is notified of every stored cycle, and of the device
@@ -33,8 +34,7 @@ import pytest
 
 from dsfd.config.panel import REGIME_NAMES
 from dsfd.integrations.bacnet.logs import LOGGED_PER_MINUTE
-from dsfd.integrations.mqtt.messages import state_message
-from dsfd.integrations.mqtt.outbox import Outbox
+from dsfd.integrations.mqtt.broker import LocalBroker
 from tests.daemon.harness import DaemonProcess, query, run_dsfd, suwon_mapping
 from tests.integrations.bacnet_fuzz import (
     SUBSCRIBE_COV_PROPERTY,
@@ -48,10 +48,12 @@ from tests.integrations.bacnet_harness import (
     DEVICE_INSTANCE,
     BacnetClient,
     bacnet_panel,
+    bacnet_section,
     free_udp_port,
     rpm_values,
     run_args,
 )
+from tests.integrations.mqtt_harness import Subscriber, mqtt_panel
 from tests.integrations.test_mqtt_commands import answered, commands
 
 pytest.importorskip("bacpypes3", reason="needs the bacnet extra: pip install 'dsfd[bacnet]'")
@@ -133,8 +135,12 @@ def no_exceptions(d: DaemonProcess) -> None:
     assert "Traceback" not in d.stderr
 
 
-def test_who_is_and_a_read_of_every_object_match_the_database(tmp_path: Path) -> None:
-    port, panel, state, db, client = setup(tmp_path, writable=False)
+def test_who_is_and_a_read_of_every_object_match_the_database_and_the_state_topic(
+        broker: LocalBroker, tmp_path: Path) -> None:
+    port, _, state, db, client = setup(tmp_path, writable=False)
+    panel = mqtt_panel(tmp_path / "panel.yaml", broker,
+                       extra={"bacnet": bacnet_section(port, writable=False)})
+    sub = Subscriber(broker, "dsfd/suwon-south/state", out=tmp_path / "sub.txt").start()
     seen: dict[str, Any] = {}
 
     async def body(d: DaemonProcess) -> None:
@@ -151,7 +157,13 @@ def test_who_is_and_a_read_of_every_object_match_the_database(tmp_path: Path) ->
         seen["objective_read_only"] = await write(client, "multi-state-value,2", 2,
                                                   kind="unsigned", priority=None)
 
-    run_with_client(panel, state, client, body, first_cycle=40)  # after a calibration
+    try:
+        run_with_client(panel, state, client, body, first_cycle=40)  # after a calibration
+        cycle = int(rpm_values(seen["rpm"])[("analogInput,15", "presentValue")])
+        messages = sub.wait_for(lambda m: any(x.topic.endswith("/state") and
+                                              x.json()["cycle"] == cycle for x in m))
+    finally:
+        sub.stop()
     # Who-Is → I-Am, Who-Has → I-Have.
     assert seen["who_is"]["i_am"] == [{"device": f"device,{DEVICE_INSTANCE}", "vendor": 999,
                                        "source": f"127.0.0.1:{port}"}]
@@ -197,13 +209,16 @@ def test_who_is_and_a_read_of_every_object_match_the_database(tmp_path: Path) ->
         "degreesAngular", "percent")
     doc = suwon_mapping()
     assert got[("analogValue,1", "covIncrement")] == f32(doc["louver"]["step_deg"])
-    # The same cycle's MQTT state message (what the state topic carries).
-    outbox = Outbox.open(db, "test")
-    try:
-        (p,), _, _ = outbox.pending((1, cycle - 1), limit=1, max_age_s=1e12)
-        msg = state_message("suwon-south", p.row, p.samples, calibrated_s=p.calibrated_s)
-    finally:
-        outbox.close()
+    # The same cycle's message on the MQTT state topic (the daemon published it).
+    (msg,) = [m.json() for m in messages if m.json()["cycle"] == cycle and not m.retained]
+    for i, signal_name in SENSORS.items():
+        assert got[(f"analogInput,{i}", "presentValue")] == f32(msg["measured"][signal_name])
+    for i, term in zip(HEAT, ("q_sol_trans", "q_cv_rd", "q_air", "q_da"), strict=True):
+        assert got[(f"analogInput,{i}", "presentValue")] == f32(msg["heat_w"][term])
+    assert got[("analogInput,14", "presentValue")] == f32(msg["calibration_age_s"])
+    assert (got[("analogValue,1", "presentValue")], got[("analogValue,2", "presentValue")],
+            got[("multiStateValue,1", "presentValue")]) == (
+        msg["command"]["louver_deg"], msg["command"]["damper_pct"], msg["command"]["regime"])
     assert got[("characterstringValue,1", "presentValue")] == msg["set_by"]
     assert got[("binaryValue,1", "presentValue")] == ("active" if msg["fault"] else "inactive")
     assert got[("analogInput,7", "presentValue")] == f32(msg["measured"]["t_out_c"])
