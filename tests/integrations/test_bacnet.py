@@ -254,7 +254,7 @@ def test_a_write_at_priority_8_holds_the_louver_and_relinquishing_it_resumes(
         await ask(client, "cov", object="analog-value,1", process=2, confirmed=True)
         seen["cov_property"] = [
             await ask(client, "cov-property", object="analog-value,1", process=3),
-            await ask(client, "cov-property", object="analog-input,1", increment=0.5,
+            await ask(client, "cov-property", object="analog-input,8", increment=2.0,
                       process=4, confirmed=True),
             await ask(client, "cov-property", object="characterstring-value,1", process=5)]
         await d.wait_cycle(d.cycles_logged[-1] + 2)
@@ -273,8 +273,13 @@ def test_a_write_at_priority_8_holds_the_louver_and_relinquishing_it_resumes(
                                          priority=8)
         resume = (await answered(db, 2))[1]
         await d.wait_cycle(resume["cycle"] + 3)
+        seen["mode"] = await write(client, "multi-state-value,2", 2, kind="unsigned",
+                                   priority=None)  # the objective: cooling
+        mode = (await answered(db, 3))[2]
+        await d.wait_cycle(mode["cycle"] + 1)
         seen["after"] = await ask(client, "rpm", objects=[["analog-value,1", [
-            "present-value", "priority-array", "current-command-priority"]]])
+            "present-value", "priority-array", "current-command-priority"]],
+            ["multi-state-value,2", ["present-value"]]])
         last = d.cycles_logged[-1]
         await asyncio.to_thread(client.wait_for, lambda c: last in c.cov_values(
             "analog-input,15"))
@@ -284,8 +289,15 @@ def test_a_write_at_priority_8_holds_the_louver_and_relinquishing_it_resumes(
             f[3] == 1 for f in c.cov_values("analog-input,15", "status-flags")))
 
     d = run_with_client(panel, state, client, body, after_stop=after_stop)
-    override, resume = commands(db)
+    override, resume, mode = commands(db)
     who = f"127.0.0.1:{client.bind_port} priority 8"
+    # The objective's multi-state value: a mode command, as dsfd mode cooling.
+    assert seen["mode"] == "ack"
+    assert (mode["kind"], json.loads(mode["args"]), mode["source"], mode["status"]) == (
+        "mode", {"mode": "cooling"}, "bacnet", "applied")
+    assert mode["requester"] == f"127.0.0.1:{client.bind_port} objective"
+    assert query(db, "SELECT objective_mode FROM decisions WHERE cycle = ?",
+                 mode["cycle"]) == [("cooling",)]
     assert seen["write"] == "ack" and seen["relinquish"] == "ack"
     # Filed as dsfd override / resume are, with the BACnet source address and priority.
     assert (override["kind"], override["source"], override["requester"], override["status"]
@@ -311,6 +323,7 @@ def test_a_write_at_priority_8_holds_the_louver_and_relinquishing_it_resumes(
     assert held[("characterstringValue,1", "presentValue")] == \
         f"operator hold (bacnet {who})"
     after = rpm_values(seen["after"])
+    assert after[("multiStateValue,2", "presentValue")] == 2
     assert after[("analogValue,1", "priorityArray")] == [None] * 16
     assert after[("analogValue,1", "currentCommandPriority")] is None
     # dsfd status names the BACnet requester.
@@ -327,15 +340,15 @@ def test_a_write_at_priority_8_holds_the_louver_and_relinquishing_it_resumes(
     assert set(stored) >= set(notified) >= {c for c in stored if c >= notified[0]}
     assert client.cov_values("analog-input,15", "status-flags")[-1] == [0, 0, 0, 1]
     assert 36.0 in client.cov_values("analog-value,1")
-    # SubscribeCOVProperty: the louver with its object's increment (one motor step), x1
-    # with the subscriber's 0.5 K, the set-by text at any change.
+    # SubscribeCOVProperty: the louver with its object's increment (one motor step), the
+    # irradiance with the subscriber's 2 W/m2 (confirmed), the set-by text at any change.
     assert [a["answer"] for a in seen["cov_property"]] == ["ack"] * 3
     louver = client.cov_values("analog-value,1", process=3)
     assert 36.0 in louver
     assert all(abs(b - a) >= 18.0 for a, b in itertools.pairwise(louver))
-    x1 = client.cov_values("analog-input,1", process=4)
-    assert len(x1) >= 2
-    assert all(abs(b - a) >= f32(0.5) - 1e-6 for a, b in itertools.pairwise(x1))
+    ghi = client.cov_values("analog-input,8", process=4)
+    assert len(ghi) >= 3  # the morning sun: irradiance rises
+    assert all(abs(b - a) >= 2.0 for a, b in itertools.pairwise(ghi))
     texts = client.cov_values("characterstring-value,1", process=5)
     assert f"operator hold (bacnet {who})" in texts and texts[-1] in {"mpc", "rule"}
 
