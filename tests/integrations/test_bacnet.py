@@ -385,12 +385,13 @@ BAD_WRITES: tuple[tuple[str, Any, str, int | None, str], ...] = (
 
 def raw_subscriptions(port: int) -> list[bytes]:
     """Two SubscribeCOVProperty requests from a raw socket (an object the device lacks, a
-    property its object lacks); the APDUs of the answers."""
+    property its object lacks) and a DeviceCommunicationControl; the APDUs of the answers."""
     requests = [
         bvll(npdu(confirmed(SUBSCRIBE_COV_PROPERTY, b"\x09\x0b\x1c" + object_id(0, 99)
                             + b"\x29\x00\x39\x3c\x4e\x09\x55\x4f", 1))),
         bvll(npdu(confirmed(SUBSCRIBE_COV_PROPERTY, b"\x09\x0b\x1c" + object_id(0, 1)
-                            + b"\x29\x00\x39\x3c\x4e\x09\x57\x4f", 2)))]  # 87: priority
+                            + b"\x29\x00\x39\x3c\x4e\x09\x57\x4f", 2))),  # 87: priority
+        bvll(npdu(confirmed(17, b"\x19\x01", 3)))]  # DeviceCommunicationControl: disable
     out = []
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
         s.bind(("127.0.0.1", 0))
@@ -434,8 +435,10 @@ def test_every_bad_write_gets_its_bacnet_error_and_changes_nothing(tmp_path: Pat
         assert after[(_camel(o), "priorityArray")] == [None] * 16, o
     # SubscribeCOVProperty of an object or property the device lacks: Error PDUs (clause
     # 20.1.7) naming object / unknown-object (31) and property / unknown-property (32).
+    # DeviceCommunicationControl: services / service-request-denied (5, 29).
     assert seen["raw"] == [bytes([0x50, 1, 28, 0x91, 1, 0x91, 31]),
-                           bytes([0x50, 2, 28, 0x91, 2, 0x91, 32])]
+                           bytes([0x50, 2, 28, 0x91, 2, 0x91, 32]),
+                           bytes([0x50, 3, 17, 0x91, 5, 0x91, 29])]
     refused = [r for r in d.records if r.get("event", "").startswith("BACnet write refused")]
     assert len(refused) == sum(code != "invalidDataType" for *_, code in BAD_WRITES)
 

@@ -120,9 +120,15 @@ def set_slot(obj: Any, priority: int, value: Any) -> None:
 
 class PanelApplication(CovPropertyServices, Application):
     """bacpypes3's application (Who-Is, Who-Has, ReadProperty(Multiple), SubscribeCOV) with
-    SubscribeCOVProperty added and WriteProperty handed to the panel device."""
+    SubscribeCOVProperty added, WriteProperty handed to the panel device and
+    DeviceCommunicationControl refused."""
 
     write_handler: WriteHandler | None = None
+
+    async def do_DeviceCommunicationControlRequest(self, apdu: Any) -> None:
+        """Refused (services / service-request-denied): without a password (bacpypes3 checks
+        none unless one is set) anyone on the network could silence the device."""
+        raise ExecutionError(errorClass="services", errorCode="serviceRequestDenied")
 
     async def do_WritePropertyRequest(self, apdu: WritePropertyRequest) -> None:
         obj = self.get_object_id(apdu.objectIdentifier)
