@@ -11,22 +11,28 @@ and the device answers the way it answers a broadcast one. Time limits are hang 
 
 from __future__ import annotations
 
+import asyncio
 import json
 import queue
+import signal
 import socket
 import subprocess
 import sys
 import threading
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Awaitable, Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-from tests.daemon.harness import ROOT, write_panel
+import numpy as np
+
+from tests.daemon.harness import ROOT, DaemonProcess, write_panel
 
 #: Hang guard for one answer of the client [s].
 ANSWER_LIMIT_S = 30.0
 DEVICE_INSTANCE = 41001
+START = "2022-01-01T23:30:00Z"  # 08:30 in Suwon, January
+SPEED = 240.0
 
 
 def free_udp_port() -> int:
@@ -153,3 +159,68 @@ class BacnetClient:
 def rpm_values(answer: Mapping[str, Any]) -> dict[tuple[str, str], Any]:
     """(object, property) → value of a ReadPropertyMultiple answer."""
     return {(o, p): v for o, p, _, v in answer["values"]}
+
+
+def f32(x: float) -> float:
+    """A value as a BACnet REAL carries it (IEEE 754 single precision)."""
+    return float(np.float32(x))
+
+
+async def ask(client: BacnetClient, op: str, **fields: Any) -> dict[str, Any]:
+    return await asyncio.to_thread(client.ask, op, **fields)
+
+
+async def write(client: BacnetClient, obj: str, value: Any, **kw: Any) -> Any:
+    return await asyncio.to_thread(client.write, obj, value, **kw)
+
+
+def setup(tmp_path: Path, *, writable: bool, extra: dict[str, Any] | None = None
+          ) -> tuple[int, Path, Path, Path, BacnetClient]:
+    """Device port, panel file, state directory, database and a client (not started)."""
+    port = free_udp_port()
+    panel = bacnet_panel(tmp_path / "panel.yaml", port=port, writable=writable, extra=extra)
+    state = tmp_path / "state"
+    return port, panel, state, state / "timeseries.sqlite", BacnetClient(port)
+
+
+def run_with_client(panel: Path, state: Path, client: BacnetClient,
+                    body: Callable[[DaemonProcess], Awaitable[None]], *,
+                    first_cycle: int = 3, speed: float = SPEED,
+                    after_stop: Callable[[DaemonProcess], Awaitable[None]] | None = None
+                    ) -> DaemonProcess:
+    """Run the daemon, start the client at ``first_cycle``, run ``body``, stop the daemon
+    with SIGTERM (then ``after_stop``), stop the client; the daemon logged no exception."""
+
+    async def scenario() -> DaemonProcess:
+        d = await DaemonProcess(run_args(panel, state, start=START, cycles=2000,
+                                         speed=speed)).start()
+        await d.wait_cycle(first_cycle)
+        await asyncio.to_thread(client.start)
+        await body(d)
+        d.signal(signal.SIGTERM)
+        assert await d.wait_exit() == 0, d.stderr
+        if after_stop is not None:
+            await after_stop(d)
+        return d
+
+    try:
+        d = asyncio.run(scenario())
+    finally:
+        assert client.stop() == ""
+    no_exceptions(d)
+    return d
+
+
+def no_exceptions(d: DaemonProcess) -> None:
+    bad = [r for r in d.records if "exception" in r or r.get("level") in ("error",
+                                                                         "critical")]
+    assert not bad, bad[:3]
+    assert "Traceback" not in d.stderr
+
+
+def camel(name: str) -> str:
+    """``analog-input,1`` → ``analogInput,1`` (bacpypes3's attribute names)."""
+    head, _, rest = name.partition(",")
+    parts = head.split("-")
+    text = parts[0] + "".join(w.capitalize() for w in parts[1:])
+    return f"{text},{rest}" if rest else text

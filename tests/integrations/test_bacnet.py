@@ -11,10 +11,8 @@ plant, dry run) with a ``bacnet:`` section → its database, ``dsfd status``.
   status`` names the BACnet requester; relinquishing it ends the hold and the controller
   decides again; a COV subscriber is notified of every stored cycle, and of the device
   going out of service when the daemon stops.
-* Every bad write gets its BACnet error and changes nothing.
-
-Cycles are paced (``--speed``): 60 simulated seconds every 0.25 s. Time limits are hang
-guards.
+Bad writes and malformed datagrams: test_bacnet_robustness.py. Cycles are paced
+(``--speed``): 60 simulated seconds every 0.25 s. Time limits are hang guards.
 """
 
 from __future__ import annotations
@@ -22,44 +20,30 @@ from __future__ import annotations
 import asyncio
 import itertools
 import json
-import signal
-import socket
-import time
-from collections.abc import Awaitable, Callable
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import pytest
 
 from dsfd.config.panel import REGIME_NAMES
-from dsfd.integrations.bacnet.logs import LOGGED_PER_MINUTE
 from dsfd.integrations.mqtt.broker import LocalBroker
 from tests.daemon.harness import DaemonProcess, query, run_dsfd, suwon_mapping
-from tests.integrations.bacnet_fuzz import (
-    SUBSCRIBE_COV_PROPERTY,
-    bvll,
-    confirmed,
-    datagrams,
-    npdu,
-    object_id,
-)
 from tests.integrations.bacnet_harness import (
     DEVICE_INSTANCE,
-    BacnetClient,
-    bacnet_panel,
+    ask,
     bacnet_section,
-    free_udp_port,
+    camel,
+    f32,
     rpm_values,
-    run_args,
+    run_with_client,
+    setup,
+    write,
 )
 from tests.integrations.mqtt_harness import Subscriber, mqtt_panel
 from tests.integrations.test_mqtt_commands import answered, commands
 
 pytest.importorskip("bacpypes3", reason="needs the bacnet extra: pip install 'dsfd[bacnet]'")
 
-START = "2022-01-01T23:30:00Z"  # 08:30 in Suwon, January
-SPEED = 240.0
 SENSORS = {1: "x1_c", 2: "x2_c", 3: "x3_c", 4: "x4_c", 5: "x5_c", 6: "v_cav_ms",
            7: "t_out_c", 8: "ghi_wm2"}
 HEAT = {9: "q_sol_trans_w", 10: "q_cv_rd_w", 11: "q_air_w", 12: "q_da_w"}
@@ -76,63 +60,6 @@ DEVICE_REQUIRED = ["object-identifier", "object-name", "object-type", "system-st
                    "protocol-services-supported", "object-list",
                    "max-apdu-length-accepted", "segmentation-supported", "apdu-timeout",
                    "number-of-apdu-retries", "device-address-binding", "database-revision"]
-
-
-def f32(x: float) -> float:
-    """A value as a BACnet REAL carries it (IEEE 754 single precision)."""
-    return float(np.float32(x))
-
-
-async def ask(client: BacnetClient, op: str, **fields: Any) -> dict[str, Any]:
-    return await asyncio.to_thread(client.ask, op, **fields)
-
-
-async def write(client: BacnetClient, obj: str, value: Any, **kw: Any) -> Any:
-    return await asyncio.to_thread(client.write, obj, value, **kw)
-
-
-def setup(tmp_path: Path, *, writable: bool, extra: dict[str, Any] | None = None
-          ) -> tuple[int, Path, Path, Path, BacnetClient]:
-    """Device port, panel file, state directory, database and a client (not started)."""
-    port = free_udp_port()
-    panel = bacnet_panel(tmp_path / "panel.yaml", port=port, writable=writable, extra=extra)
-    state = tmp_path / "state"
-    return port, panel, state, state / "timeseries.sqlite", BacnetClient(port)
-
-
-def run_with_client(panel: Path, state: Path, client: BacnetClient,
-                    body: Callable[[DaemonProcess], Awaitable[None]], *,
-                    first_cycle: int = 3, speed: float = SPEED,
-                    after_stop: Callable[[DaemonProcess], Awaitable[None]] | None = None
-                    ) -> DaemonProcess:
-    """Run the daemon, start the client at ``first_cycle``, run ``body``, stop the daemon
-    with SIGTERM (then ``after_stop``), stop the client; the daemon logged no exception."""
-
-    async def scenario() -> DaemonProcess:
-        d = await DaemonProcess(run_args(panel, state, start=START, cycles=2000,
-                                         speed=speed)).start()
-        await d.wait_cycle(first_cycle)
-        await asyncio.to_thread(client.start)
-        await body(d)
-        d.signal(signal.SIGTERM)
-        assert await d.wait_exit() == 0, d.stderr
-        if after_stop is not None:
-            await after_stop(d)
-        return d
-
-    try:
-        d = asyncio.run(scenario())
-    finally:
-        assert client.stop() == ""
-    no_exceptions(d)
-    return d
-
-
-def no_exceptions(d: DaemonProcess) -> None:
-    bad = [r for r in d.records if "exception" in r or r.get("level") in ("error",
-                                                                         "critical")]
-    assert not bad, bad[:3]
-    assert "Traceback" not in d.stderr
 
 
 def test_who_is_and_a_read_of_every_object_match_the_database_and_the_state_topic(
@@ -171,7 +98,7 @@ def test_who_is_and_a_read_of_every_object_match_the_database_and_the_state_topi
                                           "object": "analogValue,1", "name": "louver angle"}]
     got = rpm_values(seen["rpm"])
     dev = f"device,{DEVICE_INSTANCE}"
-    assert all((dev, _camel(p)) in got for p in DEVICE_REQUIRED), sorted(got)
+    assert all((dev, camel(p)) in got for p in DEVICE_REQUIRED), sorted(got)
     assert got[(dev, "objectName")] == "dsfd-suwon-south"
     assert len(got[(dev, "objectList")]) == 2 + len(ALL_OBJECTS)  # + device, network port
     # The cycle the device showed, and the database's values of that cycle.
@@ -200,7 +127,7 @@ def test_who_is_and_a_read_of_every_object_match_the_database_and_the_state_topi
     assert got[("multiStateValue,2", "stateText")][got[("multiStateValue,2",
                                                         "presentValue")] - 1] == objective
     for o in ALL_OBJECTS:
-        key = _camel(o)
+        key = camel(o)
         assert got[(key, "statusFlags")] == [0, 0, 0, 0], o  # no flag, no fault, in service
         assert got[(key, "outOfService")] is False
     for i, unit in UNITS.items():
@@ -229,15 +156,6 @@ def test_who_is_and_a_read_of_every_object_match_the_database_and_the_state_topi
     assert seen["read_only"] == denied
     assert seen["objective_read_only"] == denied
     assert commands(db) == []
-
-
-def _camel(name: str) -> str:
-    """``analog-input,1`` → ``analogInput,1`` (bacpypes3's attribute names)."""
-    head, _, rest = name.partition(",")
-    parts = head.split("-")
-    text = parts[0] + "".join(w.capitalize() for w in parts[1:])
-    text = text.replace("Characterstring", "characterstring")
-    return f"{text},{rest}" if rest else text
 
 
 def first_cycle_after(d: DaemonProcess, time_s: float) -> int:
@@ -351,142 +269,3 @@ def test_a_write_at_priority_8_holds_the_louver_and_relinquishing_it_resumes(
     assert all(abs(b - a) >= 2.0 for a, b in itertools.pairwise(ghi))
     texts = client.cov_values("characterstring-value,1", process=5)
     assert f"operator hold (bacnet {who})" in texts and texts[-1] in {"mpc", "rule"}
-
-
-def _error(code: str) -> dict[str, str]:
-    return {"error": "Error(write-property)", "errorClass": "property", "errorCode": code}
-
-
-#: (object, value, encoding, priority, the BACnet error code), for a panel with the louver
-#: limited to 72 deg on an 18 deg grid, dampers on 10 % steps and no exterior top damper.
-BAD_WRITES: tuple[tuple[str, Any, str, int | None, str], ...] = (
-    ("analog-value,1", 90.0, "real", 8, "valueOutOfRange"),      # beyond safety.phi_max_deg
-    ("analog-value,1", -1e30, "real", 8, "valueOutOfRange"),
-    ("analog-value,1", 37.0, "real", 8, "valueOutOfRange"),      # between motor steps
-    ("analog-value,1", float("nan"), "real", 8, "valueOutOfRange"),
-    ("analog-value,2", 35.0, "real", 8, "valueOutOfRange"),      # between damper steps
-    ("analog-value,2", 120.0, "real", 8, "valueOutOfRange"),
-    ("multi-state-value,1", 3, "unsigned", 8, "valueOutOfRange"),   # needs exterior top
-    ("multi-state-value,1", 11, "unsigned", 8, "valueOutOfRange"),  # no such state
-    ("multi-state-value,1", 0, "unsigned", 8, "valueOutOfRange"),
-    ("multi-state-value,2", 4, "unsigned", None, "valueOutOfRange"),  # objective 1..3
-    ("analog-value,1", "36", "string", 8, "invalidDataType"),
-    ("analog-value,1", 36, "unsigned", 8, "invalidDataType"),
-    ("multi-state-value,1", 7.0, "real", 8, "invalidDataType"),
-    ("multi-state-value,1", 7, "enumerated", 8, "invalidDataType"),
-    ("analog-value,1", 36.0, "real", 16, "writeAccessDenied"),  # the controller's priority
-    ("analog-value,1", 36.0, "real", None, "writeAccessDenied"),  # no priority means 16
-    ("analog-value,1", 36.0, "real", 0, "valueOutOfRange"),
-    ("analog-input,1", 20.0, "real", None, "writeAccessDenied"),  # a measurement
-    ("binary-value,1", 1, "enumerated", None, "writeAccessDenied"),
-    ("characterstring-value,1", "me", "string", None, "writeAccessDenied"),
-)
-
-
-def raw_subscriptions(port: int) -> list[bytes]:
-    """Two SubscribeCOVProperty requests from a raw socket (an object the device lacks, a
-    property its object lacks) and a DeviceCommunicationControl; the APDUs of the answers."""
-    requests = [
-        bvll(npdu(confirmed(SUBSCRIBE_COV_PROPERTY, b"\x09\x0b\x1c" + object_id(0, 99)
-                            + b"\x29\x00\x39\x3c\x4e\x09\x55\x4f", 1))),
-        bvll(npdu(confirmed(SUBSCRIBE_COV_PROPERTY, b"\x09\x0b\x1c" + object_id(0, 1)
-                            + b"\x29\x00\x39\x3c\x4e\x09\x57\x4f", 2))),  # 87: priority
-        bvll(npdu(confirmed(17, b"\x19\x01", 3)))]  # DeviceCommunicationControl: disable
-    out = []
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        s.settimeout(10.0)
-        for data in requests:
-            s.sendto(data, ("127.0.0.1", port))
-            out.append(s.recv(1500)[6:])  # past the BVLL (4) and NPDU (2) headers
-    return out
-
-
-def test_every_bad_write_gets_its_bacnet_error_and_changes_nothing(tmp_path: Path) -> None:
-    _, panel, state, db, client = setup(tmp_path, writable=True, extra={
-        "safety": {"phi_max_deg": 72.0, "or_step_pct": 10.0},
-        "openings": {"exterior_top": None}})
-    seen: dict[str, Any] = {}
-    objects = [[o, ["present-value", "priority-array"]] for o in
-               ("analog-value,1", "analog-value,2", "multi-state-value,1")]
-
-    async def body(d: DaemonProcess) -> None:
-        seen["first"] = d.cycles_logged[-1]
-        seen["answers"] = [await write(client, o, v, kind=k, priority=p)
-                           for o, v, k, p, _ in BAD_WRITES]
-        # A relinquish of a priority nobody wrote changes nothing either (and is no error).
-        seen["relinquish"] = await write(client, "analog-value,1", None, kind="null",
-                                         priority=9)
-        seen["raw"] = await asyncio.to_thread(raw_subscriptions, client.device_port)
-        await d.wait_cycle(d.cycles_logged[-1] + 3)
-        seen["after"] = await ask(client, "rpm", objects=objects)
-
-    d = run_with_client(panel, state, client, body)
-    for (obj, value, kind, priority, code), answer in zip(BAD_WRITES, seen["answers"],
-                                                          strict=True):
-        assert answer == _error(code), (obj, value, kind, priority)
-    assert seen["relinquish"] == "ack"
-    assert commands(db) == []  # nothing filed
-    held = query(db, "SELECT cycle FROM decisions WHERE hold_source IS NOT NULL OR "
-                 "method = 'manual'")
-    assert held == []
-    after = rpm_values(seen["after"])
-    for o, _ in objects:
-        assert after[(_camel(o), "priorityArray")] == [None] * 16, o
-    # SubscribeCOVProperty of an object or property the device lacks: Error PDUs (clause
-    # 20.1.7) naming object / unknown-object (31) and property / unknown-property (32).
-    # DeviceCommunicationControl: services / service-request-denied (5, 29).
-    assert seen["raw"] == [bytes([0x50, 1, 28, 0x91, 1, 0x91, 31]),
-                           bytes([0x50, 2, 28, 0x91, 2, 0x91, 32]),
-                           bytes([0x50, 3, 17, 0x91, 5, 0x91, 29])]
-    refused = [r for r in d.records if r.get("event", "").startswith("BACnet write refused")]
-    assert len(refused) == sum(code != "invalidDataType" for *_, code in BAD_WRITES)
-
-
-FUZZ_COUNT = 2000
-
-
-def test_the_daemon_survives_2000_malformed_datagrams_without_missing_a_cycle(
-        tmp_path: Path) -> None:
-    port, panel, state, db, client = setup(tmp_path, writable=True)
-    seen: dict[str, Any] = {}
-    packets = datagrams(FUZZ_COUNT, seed=37)
-
-    def fuzz() -> int:
-        """Send every datagram (about 400 a second), reading whatever comes back."""
-        answers = 0
-        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-            s.bind(("127.0.0.1", 0))
-            s.setblocking(False)
-            for i, data in enumerate(packets):
-                s.sendto(data, ("127.0.0.1", port))
-                if i % 20 == 19:
-                    time.sleep(0.05)
-                while True:
-                    try:
-                        s.recv(65536)
-                    except BlockingIOError:
-                        break
-                    answers += 1
-        return answers
-
-    async def body(d: DaemonProcess) -> None:
-        seen["answers"] = await asyncio.to_thread(fuzz)
-        await d.wait_cycle(d.cycles_logged[-1] + 2)
-        seen["who_is"] = await ask(client, "who-is")
-        seen["rpm"] = await ask(client, "rpm", objects=[["analog-input,15", [
-            "present-value"]]])
-
-    d = run_with_client(panel, state, client, body)
-    assert seen["answers"] > 0  # confirmed requests were answered (errors, rejects)
-    assert [a["device"] for a in seen["who_is"]["i_am"]] == [f"device,{DEVICE_INSTANCE}"]
-    assert rpm_values(seen["rpm"])[("analogInput,15", "presentValue")] >= 3
-    cycles = [c for (c,) in query(db, "SELECT cycle FROM decisions ORDER BY cycle")]
-    assert cycles == list(range(1, len(cycles) + 1))
-    assert query(db, "SELECT SUM(skipped_slots) FROM decisions") == [(0,)]
-    assert commands(db) == []
-    assert not d.events("cycle overran")
-    # Logged without tracebacks, a few a minute, the rest counted.
-    assert 0 < len(d.events("BACnet datagram dropped")) <= LOGGED_PER_MINUTE
-    assert any("more BACnet datagram(s) dropped" in r["event"]
-                                for r in d.records)
