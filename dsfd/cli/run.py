@@ -121,6 +121,11 @@ def _announce(cfg: PanelConfig, opts: RunOptions, state_dir: Path, *, temporary:
         print("  simulated plant: nothing is written to hardware")
     print(f"  state directory: {state_dir}"
           + (" (temporary, removed at exit; --state-dir keeps it)" if temporary else ""))
+    bn = cfg.bacnet
+    if bn is not None:
+        print(f"  BACnet/IP device {bn.device_instance} on UDP {bn.bind_address()}: "
+              + ("WRITABLE (priority 1-15 writes hold the panel)" if bn.writable
+                 else "read-only"))
 
 
 def run(args: argparse.Namespace) -> int:
