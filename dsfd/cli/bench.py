@@ -165,7 +165,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "table")
     p.add_argument("--cycles", type=int, default=None,
                    help="mqtt, bacnet: daemon cycles whose publish / COV latency is measured "
-                   "(default 200)")
+                   "(default 200, bacnet 100)")
     p.add_argument("--reads", type=int, default=None,
                    help="bacnet: ReadPropertyMultiple requests timed (default 500)")
     p.add_argument("--backlog", type=int, default=None,
