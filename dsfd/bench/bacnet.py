@@ -11,8 +11,9 @@ a simulated clock, and bacpypes3's client side in a process of its own
    time, as on a real panel; at 600 the loop's ~0.1 s of computing per cycle would take all
    of it, and the device, a thread of the same process, would wait for it). Latency of a
    cycle = time from its commit to the database (when the loop tells the device) to the
-   arrival of its notification at the client, both on the host's monotonic clock: the device's wake-up, reading the cycle back,
-   setting the points, COV detection, encoding, UDP, the client's decoding.
+   arrival of its notification at the client, both on the host's monotonic clock: the
+   device's wake-up, reading the cycle back, setting the points, COV detection, encoding,
+   UDP, the client's decoding.
 2. **Reads.** Then, with the daemon still cycling, ``reads`` ReadPropertyMultiple requests of
    the present value and status flags of every point, one after the other, as a BMS poller
    sends them: requests per second and property values per second.
