@@ -21,7 +21,6 @@ without one stays where it is.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -30,7 +29,7 @@ from dsfd.daemon.commands import MAX_HOLD_S, CommandError, validate_command
 from dsfd.integrations.bacnet.points import COMMAND_FIELDS, OBJECTIVE_STATES
 
 __all__ = ["CONTROLLER_PRIORITY", "BacnetWriteError", "PriorityArrays", "check_value",
-           "objective_request", "validated"]
+           "objective_request"]
 
 #: The priority of the controller's own command (the relinquish default stands for it).
 CONTROLLER_PRIORITY = 16
@@ -118,11 +117,3 @@ class PriorityArrays:
             request[COMMAND_FIELDS[key]] = value
         writer = min(top.values(), key=lambda t: t[0])[2]
         return request, writer
-
-
-def validated(cfg: PanelConfig, request: Mapping[str, Any]) -> None:
-    """Check a combined request (regime 10 with a damper opening …): value-out-of-range."""
-    try:
-        validate_command(cfg, request)
-    except CommandError as exc:
-        raise BacnetWriteError("valueOutOfRange", str(exc)) from None

@@ -44,7 +44,6 @@ from dsfd.integrations.bacnet.commands import (
     PriorityArrays,
     check_value,
     objective_request,
-    validated,
 )
 from dsfd.integrations.bacnet.logs import BacpypesLogs
 from dsfd.integrations.bacnet.points import Point, point_values, points_for
@@ -81,6 +80,7 @@ class BacnetDevice:
         self.database: Path | None = None
         self._loop: asyncio.AbstractEventLoop | None = None
         self._wake: asyncio.Event | None = None
+        self._write_lock = asyncio.Lock()
         self._stop = threading.Event()
         self._ready = threading.Event()
         self._thread: threading.Thread | None = None
@@ -239,7 +239,8 @@ class BacnetDevice:
 
         key = next((k for k, o in self.objects.items() if o is obj), None)
         try:
-            await self._write(key, value, priority, source)
+            async with self._write_lock:  # one write at a time: each sees the last's arrays
+                await self._write(key, value, priority, source)
         except BacnetWriteError as exc:
             self.writes_refused += 1
             log.warning("BACnet write refused: %s", exc.reason, point=key, value=str(value),
@@ -256,8 +257,8 @@ class BacnetDevice:
             raise BacnetWriteError("writeAccessDenied", f"{key or 'this object'} is read-only")
         if point.key == "objective":
             if value is None:
-                raise BacnetWriteError("invalidDataType", "NULL: the objective has no priority "
-                                    "array; write 1 heating, 2 cooling or 3 auto")
+                raise BacnetWriteError("invalidDataType", "NULL: the objective has no "
+                                       "priority array; write 1 heating, 2 cooling or 3 auto")
             request = objective_request(int(value))
             await self._file(request, f"{source} objective")
             return
@@ -265,8 +266,8 @@ class BacnetDevice:
         if not 1 <= p <= CONTROLLER_PRIORITY:
             raise BacnetWriteError("valueOutOfRange", f"priority {p}: expected 1..16")
         if p == CONTROLLER_PRIORITY:
-            raise BacnetWriteError("writeAccessDenied", "priority 16 is the controller's own "
-                                "command; an operator writes at 1..15")
+            raise BacnetWriteError("writeAccessDenied", "priority 16 is the controller's "
+                                   "own command; an operator writes at 1..15")
         number = None if value is None else check_value(self.cfg, point.key, value)
         writer = f"{source} priority {p}"
         trial = PriorityArrays({k: dict(v) for k, v in self.arrays.slots.items()})
@@ -274,8 +275,7 @@ class BacnetDevice:
             self._commit(trial, point.key, p, number)  # in force unchanged: no command
             return
         request, by = trial.request(until_relinquished=self.settings.hold_until_relinquished)
-        validated(self.cfg, request)
-        cid = await self._file(request, by or writer)
+        cid = await self._file(request, by or writer)  # checks the combined request too
         self._commit(trial, point.key, p, number)
         self._our_command = None if request["command"] == "resume" else cid
 
