@@ -20,6 +20,7 @@ from __future__ import annotations
 import asyncio
 import itertools
 import json
+import socket
 from pathlib import Path
 from typing import Any
 
@@ -62,15 +63,29 @@ DEVICE_REQUIRED = ["object-identifier", "object-name", "object-type", "system-st
                    "number-of-apdu-retries", "device-address-binding", "database-revision"]
 
 
+def broadcast_who_is(port: int) -> bytes:
+    """A Who-Is without limits as a BACnet/IP broadcast (Original-Broadcast-NPDU) from a raw
+    socket; the answer's datagram."""
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_BROADCAST, 1)
+        s.bind(("127.0.0.1", 0))
+        s.settimeout(10.0)
+        s.sendto(bytes([0x81, 0x0B, 0x00, 0x08, 0x01, 0x00, 0x10, 0x08]),
+                 ("127.255.255.255", port))
+        return s.recv(1500)
+
+
 def test_who_is_and_a_read_of_every_object_match_the_database_and_the_state_topic(
         broker: LocalBroker, tmp_path: Path) -> None:
     port, _, state, db, client = setup(tmp_path, writable=False)
     panel = mqtt_panel(tmp_path / "panel.yaml", broker,
-                       extra={"bacnet": bacnet_section(port, writable=False)})
+                       extra={"bacnet": bacnet_section(port, writable=False,
+                                                       address="127.0.0.1/8")})
     sub = Subscriber(broker, "dsfd/suwon-south/state", out=tmp_path / "sub.txt").start()
     seen: dict[str, Any] = {}
 
     async def body(d: DaemonProcess) -> None:
+        seen["broadcast"] = await asyncio.to_thread(broadcast_who_is, port)
         seen["who_is"] = await ask(client, "who-is")
         seen["who_has"] = await ask(client, "who-has", name="louver angle")
         props = ["object-name", "present-value", "status-flags", "out-of-service"]
@@ -91,7 +106,14 @@ def test_who_is_and_a_read_of_every_object_match_the_database_and_the_state_topi
                                               x.json()["cycle"] == cycle for x in m))
     finally:
         sub.stop()
-    # Who-Is → I-Am, Who-Has → I-Have.
+    # Who-Is → I-Am, Who-Has → I-Have. A broadcast Who-Is reaches the device on the
+    # subnet's broadcast address (127.255.255.255 for 127.0.0.1/8); bacpypes3 answers the
+    # requester: Original-Unicast-NPDU, unconfirmed I-Am (clause 16.10) with the device
+    # identifier (object type 8), max APDU 1024, segmented-both, vendor 999.
+    assert seen["broadcast"] == bytes([
+        0x81, 0x0A, 0x00, 0x15, 0x01, 0x00, 0x10, 0x00, 0xC4,
+        *((8 << 22) | DEVICE_INSTANCE).to_bytes(4, "big"), 0x22, 0x04, 0x00, 0x91, 0x00,
+        0x22, 0x03, 0xE7])
     assert seen["who_is"]["i_am"] == [{"device": f"device,{DEVICE_INSTANCE}", "vendor": 999,
                                        "source": f"127.0.0.1:{port}"}]
     assert seen["who_has"]["i_have"] == [{"device": f"device,{DEVICE_INSTANCE}",
