@@ -11,6 +11,7 @@ plant, dry run) with a ``bacnet:`` section → its database, ``dsfd status``.
   status`` names the BACnet requester; relinquishing it ends the hold and the controller
   decides again; a COV subscriber is notified of every stored cycle, and of the device
   going out of service when the daemon stops.
+* A signal the quality checks flag sets its analog input's fault flag and reliability.
 Bad writes and malformed datagrams: test_bacnet_robustness.py. Cycles are paced
 (``--speed``): 60 simulated seconds every 0.25 s. Time limits are hang guards.
 """
@@ -291,3 +292,27 @@ def test_a_write_at_priority_8_holds_the_louver_and_relinquishing_it_resumes(
     assert all(abs(b - a) >= 2.0 for a, b in itertools.pairwise(ghi))
     texts = client.cov_values("characterstring-value,1", process=5)
     assert f"operator hold (bacnet {who})" in texts and texts[-1] in {"mpc", "rule"}
+
+
+def test_a_flagged_signal_sets_its_fault_flag(tmp_path: Path) -> None:
+    # x1 flagged RATE whenever it moves by more than 0.001 K a minute: every cycle.
+    _, panel, state, db, client = setup(tmp_path, writable=False, extra={
+        "daemon": {"quality": {"max_rate_k_per_min": 0.001, "rate_signals": ["x1_c"]}}})
+    seen: dict[str, Any] = {}
+
+    async def body(d: DaemonProcess) -> None:
+        seen["rpm"] = await ask(client, "rpm", objects=[
+            [o, ["present-value", "status-flags", "reliability"]] for o in (
+                "analog-input,1", "analog-input,2", "binary-value,1", "analog-input,15")])
+
+    run_with_client(panel, state, client, body, first_cycle=5)
+    got = rpm_values(seen["rpm"])
+    cycle = int(got[("analogInput,15", "presentValue")])
+    quality = dict(query(db, "SELECT signal, quality FROM samples WHERE run_id = 1 AND "
+                         "cycle = ?", cycle))
+    assert quality["x1_c"] != "good" and quality["x2_c"] == "good"
+    assert got[("analogInput,1", "statusFlags")] == [0, 1, 0, 0]
+    assert got[("analogInput,1", "reliability")] == "unreliableOther"
+    assert got[("analogInput,2", "statusFlags")] == [0, 0, 0, 0]
+    assert got[("analogInput,2", "reliability")] == "noFaultDetected"
+    assert got[("binaryValue,1", "presentValue")] == "active"  # the panel's fault point
