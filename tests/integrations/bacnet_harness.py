@@ -7,7 +7,8 @@ BACnet/IP broadcasts go to the sender's own port on the subnet's broadcast addre
 endpoints on one host with different ports cannot reach each other by broadcast: the client
 sends its Who-Is and Who-Has to the device's address (unicast, which clause 16.10 allows),
 and the device answers the way it answers a broadcast one. A broadcast Who-Is is tested
-from a raw socket (test_bacnet.py), which can send to the device's port on 127.255.255.255. Time limits are hang guards.
+from a raw socket (test_bacnet.py), which can send to the device's port on 127.255.255.255.
+Time limits are hang guards.
 """
 
 from __future__ import annotations
