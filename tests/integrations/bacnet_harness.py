@@ -49,13 +49,6 @@ def bacnet_section(port: int, *, writable: bool, **more: Any) -> dict[str, Any]:
             "writable": writable, **more}
 
 
-def bacnet_panel(path: Path, *, port: int, writable: bool = False,
-                 extra: Mapping[str, Any] | None = None) -> Path:
-    """A simulation panel file whose BACnet device listens on 127.0.0.1:``port``."""
-    return write_panel(path, devices=False, extra={
-        "bacnet": bacnet_section(port, writable=writable), **(extra or {})})
-
-
 def run_args(panel: Path, state: Path, *, start: str, cycles: int, speed: float) -> list[str]:
     return ["run", "--config", str(panel), "--dry-run", "--plant", "sim", "--plant-fidelity",
             "lumped", "--start", start, "--cycles", str(cycles), "--speed", str(speed),
@@ -176,11 +169,14 @@ async def write(client: BacnetClient, obj: str, value: Any, **kw: Any) -> Any:
     return await asyncio.to_thread(client.write, obj, value, **kw)
 
 
-def setup(tmp_path: Path, *, writable: bool, extra: dict[str, Any] | None = None
+def setup(tmp_path: Path, *, writable: bool, extra: dict[str, Any] | None = None,
+          bacnet: dict[str, Any] | None = None
           ) -> tuple[int, Path, Path, Path, BacnetClient]:
-    """Device port, panel file, state directory, database and a client (not started)."""
+    """Device port, panel file, state directory, database and a client (not started);
+    ``bacnet``: more keys of the section."""
     port = free_udp_port()
-    panel = bacnet_panel(tmp_path / "panel.yaml", port=port, writable=writable, extra=extra)
+    panel = write_panel(tmp_path / "panel.yaml", devices=False, extra={
+        "bacnet": bacnet_section(port, writable=writable, **(bacnet or {})), **(extra or {})})
     state = tmp_path / "state"
     return port, panel, state, state / "timeseries.sqlite", BacnetClient(port)
 

@@ -254,6 +254,9 @@ def test_a_write_at_priority_8_holds_the_louver_and_relinquishing_it_resumes(
     for c in range(override["cycle"], resume["cycle"]):
         assert rows[c] == ("manual", 36.0, "operator", override["command_id"]), c
     assert rows[override["cycle"] - 1][2] is None
+    # The hold lasts safety.manual_hold_min (120 min; the 22:00 reset is later), as others.
+    assert query(db, "SELECT hold_expires_s - time_s FROM decisions WHERE cycle = ?",
+                 override["cycle"]) == [(120 * 60.0,)]
     # Relinquished: the controller decides again.
     for c in range(resume["cycle"], max(rows) + 1):
         assert rows[c][0] in {"mpc", "rule"} and rows[c][2] is None, (c, rows[c])
@@ -316,3 +319,21 @@ def test_a_flagged_signal_sets_its_fault_flag(tmp_path: Path) -> None:
     assert got[("analogInput,2", "statusFlags")] == [0, 0, 0, 0]
     assert got[("analogInput,2", "reliability")] == "noFaultDetected"
     assert got[("binaryValue,1", "presentValue")] == "active"  # the panel's fault point
+
+
+def test_a_hold_until_relinquished_lasts_a_week(tmp_path: Path) -> None:
+    _, panel, state, db, client = setup(tmp_path, writable=True, bacnet={
+        "hold_until_relinquished": True})
+    seen: dict[str, Any] = {}
+
+    async def body(d: DaemonProcess) -> None:
+        seen["write"] = await write(client, "multi-state-value,1", 3, kind="unsigned",
+                                    priority=5)
+        seen["command"] = (await answered(db, 1))[0]
+
+    run_with_client(panel, state, client, body)
+    cmd = seen["command"]
+    assert seen["write"] == "ack" and cmd["status"] == "applied"
+    assert cmd["requester"] == f"127.0.0.1:{client.bind_port} priority 5"
+    assert query(db, "SELECT afr, hold_source, hold_expires_s - time_s FROM decisions "
+                 "WHERE cycle = ?", cmd["cycle"]) == [(3, "operator", 7 * 86400.0)]
