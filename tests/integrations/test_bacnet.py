@@ -12,6 +12,7 @@ plant, dry run) with a ``bacnet:`` section → its database, ``dsfd status``.
   decides again; a COV subscriber is notified of every stored cycle, and of the device
   going out of service when the daemon stops.
 * A signal the quality checks flag sets its analog input's fault flag and reliability.
+* With ``foreign_device``, the device registers with the BBMD (a raw socket stands in).
 Bad writes and malformed datagrams: test_bacnet_robustness.py. Cycles are paced
 (``--speed``): 60 simulated seconds every 0.25 s. Time limits are hang guards.
 """
@@ -337,3 +338,25 @@ def test_a_hold_until_relinquished_lasts_a_week(tmp_path: Path) -> None:
     assert cmd["requester"] == f"127.0.0.1:{client.bind_port} priority 5"
     assert query(db, "SELECT afr, hold_source, hold_expires_s - time_s FROM decisions "
                  "WHERE cycle = ?", cmd["cycle"]) == [(3, "operator", 7 * 86400.0)]
+
+
+def test_the_device_registers_as_a_foreign_device_with_the_bbmd(tmp_path: Path) -> None:
+    """A raw socket stands in for the BBMD: it receives Register-Foreign-Device (Annex
+    J.2.6: BVLL function 0x05 with the time-to-live) and acknowledges it (BVLC-Result 0)."""
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as bbmd:
+        bbmd.bind(("127.0.0.1", 0))
+        bbmd.settimeout(30.0)
+        _, panel, state, _, client = setup(tmp_path, writable=False, bacnet={
+            "foreign_device": {"bbmd": f"127.0.0.1:{bbmd.getsockname()[1]}", "ttl_s": 120}})
+        seen: dict[str, Any] = {}
+
+        async def body(d: DaemonProcess) -> None:
+            data, source = await asyncio.to_thread(bbmd.recvfrom, 1500)
+            bbmd.sendto(bytes([0x81, 0x00, 0x00, 0x06, 0x00, 0x00]), source)
+            seen["register"], seen["source"] = data, source
+            seen["who_is"] = await ask(client, "who-is")  # still answers directly
+
+        run_with_client(panel, state, client, body)
+    assert seen["register"] == bytes([0x81, 0x05, 0x00, 0x06, 0x00, 120])
+    assert seen["source"] == ("127.0.0.1", client.device_port)
+    assert [a["device"] for a in seen["who_is"]["i_am"]] == [f"device,{DEVICE_INSTANCE}"]
