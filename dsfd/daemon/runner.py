@@ -74,7 +74,8 @@ class PlantUnderTest(Protocol):
 
 
 class Integration(Protocol):
-    """Something beside the loop that reads what the daemon stores (the MQTT publisher).
+    """Something beside the loop that reads what the daemon stores (the MQTT publisher, the
+    BACnet device).
 
     The CLI builds it and hands it to :func:`serve` (the daemon does not import the
     integrations). It is started once the database is open, told after every stored cycle
@@ -283,7 +284,8 @@ async def serve(opts: RunOptions, cfg: PanelConfig, *, state_dir: Path,
 
     ``plant`` is the simulated plant of ``--plant sim`` (its driver replaces the devices and
     the clock starts at its start); without it the panel's ``devices:`` are opened.
-    ``integrations`` (the MQTT publisher) run beside the loop, fed from the database.
+    ``integrations`` (the MQTT publisher, the BACnet device) run beside the loop, fed from
+    the database.
     ``clock`` replaces the daemon's clock (tests that step the wall clock).
 
     Raises :class:`~dsfd.storage.lock.StateDirBusyError` before anything is opened if
