@@ -89,6 +89,7 @@ class BacnetDevice:
         self._our_command: int | None = None
         #: Counts for the log and the tests.
         self.cycles_shown = self.writes_accepted = self.writes_refused = 0
+        self.show_failures = 0
         self.failed: str | None = None
         self.logs = BacpypesLogs()
 
@@ -181,8 +182,13 @@ class BacnetDevice:
             for p in cycles:
                 message = state_message(self.cfg.panel.id, p.row, p.samples,
                                         calibrated_s=p.calibrated_s)
-                self._follow_daemon(outbox.conn, message)
-                self.show(message)
+                try:
+                    self._follow_daemon(outbox.conn, message)
+                    self.show(message)
+                except Exception:  # a bug here must not end the device for good
+                    self.show_failures += 1
+                    if self.show_failures == 1:
+                        log.exception("BACnet device could not show cycle %d", p.key[1])
                 self._after = p.key
                 self.cycles_shown += 1
                 await asyncio.sleep(0)  # COV detection runs between cycles

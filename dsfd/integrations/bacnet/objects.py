@@ -65,7 +65,10 @@ class ReadOnlyAV(_NoDirectWrite, AnalogValueObject):
 
 
 class ReadOnlyMSV(_NoDirectWrite, MultiStateValueObject):
-    pass
+    # bacpypes3 0.0.110 gives multi-state objects the COV-increment criteria, which need a
+    # covIncrement they do not have (the first subscription fails); clause 13.1.2: any
+    # change of the present value or the status flags is notified.
+    _cov_criteria = GenericCriteria
 
 
 class ReadOnlyBV(_NoDirectWrite, BinaryValueObject):
@@ -99,6 +102,7 @@ class CommandableAV(_NoDirectWrite, _InForce, AnalogValueObject):
 
 class CommandableMSV(_NoDirectWrite, _InForce, MultiStateValueObject):
     _required = ("priorityArray",)
+    _cov_criteria = GenericCriteria  # as ReadOnlyMSV
 
 
 def set_present_value(obj: Any, value: Any) -> None:
