@@ -48,7 +48,8 @@ def unconfirmed(service: int, params: bytes) -> bytes:
 
 def _valid_requests(rng: random.Random) -> list[bytes]:
     """APDUs of the services the device has, well formed."""
-    obj = object_id(rng.choice([0, 2, 5, 19, 40, 8]), rng.randrange(0, 20))
+    kind = rng.choice([0, 2, 5, 19, 40, 8])
+    obj = object_id(kind, 41001 if kind == 8 and rng.random() < 0.5 else rng.randrange(0, 20))
     prop = bytes([0x19, rng.choice([85, 77, 87, 111, 0, 8, 255])])
     real = b"\x44" + struct.pack(">f", rng.uniform(-1e6, 1e6))
     return [
@@ -60,7 +61,8 @@ def _valid_requests(rng: random.Random) -> list[bytes]:
         confirmed(SUBSCRIBE_COV, b"\x09\x01\x1c" + obj + b"\x29\x00\x39\x3c",
                   rng.randrange(256)),
         confirmed(SUBSCRIBE_COV_PROPERTY, b"\x09\x02\x1c" + obj + b"\x29\x00\x39\x3c\x4e\x09"
-                  b"\x55\x4f", rng.randrange(256)),
+                  + bytes([rng.choice([85, 77, 111, 87, 28, 36, 103, 117, 76, 104])])
+                  + b"\x4f", rng.randrange(256)),
         unconfirmed(WHO_IS, b"\x09\x00\x1b\x3f\xff\xfe"),
         unconfirmed(WHO_HAS, b"\x3d\x06\x00louver"),
     ]

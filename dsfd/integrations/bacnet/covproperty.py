@@ -32,7 +32,7 @@ from bacpypes3.errors import ExecutionError, ObjectError, PropertyError
 
 __all__ = ["MAX_SUBSCRIPTIONS", "CovPropertyServices"]
 
-#: Property subscriptions kept at most.
+#: Subscriptions kept at most, of each kind (SubscribeCOV, SubscribeCOVProperty).
 MAX_SUBSCRIPTIONS = 256
 
 
@@ -68,7 +68,8 @@ class CovPropertyServices:
         if ref.propertyArrayIndex is not None:
             raise PropertyError("propertyIsNotAnArray")
         attr = ref.propertyIdentifier.attr
-        if attr not in obj._elements or not obj.get_property_type(ref.propertyIdentifier):
+        if attr not in obj._elements or not obj.get_property_type(ref.propertyIdentifier) \
+                or getattr(obj, attr) is None:  # a property the object does not have
             raise PropertyError("unknownProperty")
         key = (str(apdu.pduSource), int(apdu.subscriberProcessIdentifier),
                obj.objectIdentifier, attr)
@@ -112,6 +113,8 @@ class CovPropertyServices:
                 sub.obj._property_monitors[sub.attr].remove(sub.monitor)
             return
         value = getattr(sub.obj, sub.attr)
+        if value is None:
+            return
         values = [PropertyValue(propertyIdentifier=sub.attr, value=AnyValue(value))]
         if sub.attr != "statusFlags" and "statusFlags" in sub.obj._elements:
             values.append(PropertyValue(propertyIdentifier="statusFlags",

@@ -27,7 +27,13 @@ from bacpypes3.apdu import SimpleAckPDU, WritePropertyRequest
 from bacpypes3.app import Application
 from bacpypes3.basetypes import PropertyIdentifier
 from bacpypes3.constructeddata import Array
-from bacpypes3.errors import ExecutionError, ObjectError, PropertyError, RejectException
+from bacpypes3.errors import (
+    ExecutionError,
+    MissingRequiredParameter,
+    ObjectError,
+    PropertyError,
+    RejectException,
+)
 from bacpypes3.local.analog import AnalogInputObject, AnalogValueObject
 from bacpypes3.local.binary import BinaryValueObject
 from bacpypes3.local.cmd import Commandable
@@ -37,7 +43,7 @@ from bacpypes3.local.object import Object as LocalObject
 from bacpypes3.object import CharacterStringValueObject
 from bacpypes3.primitivedata import Null, Unsigned
 
-from dsfd.integrations.bacnet.covproperty import CovPropertyServices
+from dsfd.integrations.bacnet.covproperty import MAX_SUBSCRIPTIONS, CovPropertyServices
 
 __all__ = ["CommandableAV", "CommandableMSV", "PanelApplication", "ReadOnlyAI", "ReadOnlyAV",
            "ReadOnlyBV", "ReadOnlyCSV", "ReadOnlyMSV", "WriteHandler", "refusal",
@@ -129,6 +135,38 @@ class PanelApplication(CovPropertyServices, Application):
 
     write_handler: WriteHandler | None = None
 
+    async def do_SubscribeCOVRequest(self, apdu: Any) -> None:
+        """bacpypes3's SubscribeCOV, with its parameters checked first (clause 13.14.1.1):
+        a lifetime without Issue Confirmed Notifications is rejected, Issue Confirmed
+        Notifications without a lifetime means an indefinite one (bacpypes3 fails on it),
+        and at most :data:`~dsfd.integrations.bacnet.covproperty.MAX_SUBSCRIPTIONS`
+        subscriptions are kept."""
+        confirmed, lifetime = apdu.issueConfirmedNotifications, apdu.lifetime
+        if confirmed is None and lifetime is not None:
+            raise MissingRequiredParameter("issueConfirmedNotifications goes with lifetime")
+        if confirmed is not None:
+            if lifetime is None:
+                apdu.lifetime = 0
+            if self._cov_subscriptions() >= MAX_SUBSCRIPTIONS and not self._subscribed(apdu):
+                raise ExecutionError(errorClass="services", errorCode="covSubscriptionFailed")
+        await super().do_SubscribeCOVRequest(apdu)
+
+    def _cov_subscriptions(self) -> int:
+        return sum(len(d.cov_subscriptions) for d in self._cov_detections.values())
+
+    def _subscribed(self, apdu: Any) -> bool:
+        detection = self._cov_detections.get(apdu.monitoredObjectIdentifier)
+        return detection is not None and any(
+            c.client_addr == apdu.pduSource and c.proc_id == apdu.subscriberProcessIdentifier
+            for c in detection.cov_subscriptions)
+
+    def cov_confirmation(self, cov: Any, future: Any) -> None:
+        """The answer to a confirmed COV notification. bacpypes3 re-raises an error, a reject
+        or a time-out here, in a loop callback; a subscriber that does not acknowledge only
+        misses that notification (its subscription ends with its lifetime)."""
+        if not future.cancelled():
+            future.exception()
+
     async def do_DeviceCommunicationControlRequest(self, apdu: Any) -> None:
         """Refused (services / service-request-denied): without a password (bacpypes3 checks
         none unless one is set) anyone on the network could silence the device."""
@@ -147,7 +185,8 @@ class PanelApplication(CovPropertyServices, Application):
         priority = apdu.priority
         try:
             value = apdu.propertyValue.cast_out(property_type, null=True)
-        except (RejectException, ValueError, TypeError):
+        except (RejectException, ValueError, TypeError, AttributeError, IndexError):
+            # AttributeError: bacpypes3 reads past an empty value's tags
             raise PropertyError("invalidDataType") from None
         if isinstance(value, Null):
             value = None
