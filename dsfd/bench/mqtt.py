@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 
 from dsfd import __version__
+from dsfd.bench.timed import TimedIntegration
 from dsfd.config.mqtt import Mqtt
 from dsfd.daemon.logging_setup import configure_logging
 from dsfd.daemon.loop import CycleOutcome
@@ -46,7 +47,6 @@ from dsfd.daemon.runner import RunOptions, load_for_run, serve
 from dsfd.integrations.mqtt import publisher_for_run
 from dsfd.integrations.mqtt.broker import LocalBroker
 from dsfd.integrations.mqtt.link import BrokerLink, new_client
-from dsfd.integrations.mqtt.publisher import MqttPublisher
 from dsfd.sim.daemon_plant import plant_for_run
 
 __all__ = ["DEFAULT_BACKLOG", "DEFAULT_CYCLES", "DEFAULT_SPEED", "bench_mqtt"]
@@ -111,25 +111,6 @@ class _Receiver:
         self.client.loop_stop()
 
 
-class _Timed:
-    """The publisher, with the time each cycle was handed to it."""
-
-    def __init__(self, publisher: MqttPublisher) -> None:
-        self.publisher = publisher
-        self.name = publisher.name
-        self.stored: dict[int, float] = {}
-
-    def start(self, *, database: Path) -> None:
-        self.publisher.start(database=database)
-
-    def cycle_stored(self, cycle: int) -> None:
-        self.stored[cycle] = time.perf_counter()
-        self.publisher.cycle_stored(cycle)
-
-    def stop(self) -> None:
-        self.publisher.stop()
-
-
 def bench_mqtt(config: Path, *, cycles: int = DEFAULT_CYCLES, backlog: int = DEFAULT_BACKLOG,
                speed: float = DEFAULT_SPEED, seed: int = 0) -> dict[str, float]:
     """Measure publish latency and backlog drain rate (see the module docstring)."""
@@ -163,7 +144,7 @@ def _measure(base_cfg: Any, config: Path, work: Path, broker: LocalBroker, *, cy
     cfg = with_mqtt("bench/live")
     state_dir = work / "state"
     receiver = _Receiver(broker, "bench/live/state")
-    timed = _Timed(publisher_for_run(cfg, config_path=config, version=__version__))
+    timed = TimedIntegration(publisher_for_run(cfg, config_path=config, version=__version__))
     cycle_ms: list[float] = []
 
     def on_cycle(out: CycleOutcome) -> None:

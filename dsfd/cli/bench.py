@@ -56,6 +56,16 @@ def _bench_mqtt(args: argparse.Namespace) -> dict[str, float]:
                       backlog=args.backlog or DEFAULT_BACKLOG, seed=args.seed)
 
 
+def _bench_bacnet(args: argparse.Namespace) -> dict[str, float]:
+    from dsfd.integrations.bacnet import require_bacpypes3
+
+    require_bacpypes3()
+    from dsfd.bench.bacnet import DEFAULT_CYCLES, DEFAULT_READS, bench_bacnet
+
+    return bench_bacnet(args.config, cycles=args.cycles or DEFAULT_CYCLES,
+                        reads=args.reads or DEFAULT_READS, seed=args.seed)
+
+
 def _bench_calibration(args: argparse.Namespace) -> dict[str, float]:
     from dsfd.bench.calibration import bench_calibration
 
@@ -169,6 +179,7 @@ TARGETS: dict[str, Callable[[argparse.Namespace], dict[str, Any]]] = {
     "plant-velocity": _bench_plant_velocity,
     "daemon": _bench_daemon,
     "mqtt": _bench_mqtt,
+    "bacnet": _bench_bacnet,
     "calibration": _bench_calibration,
     "paper-tables": _bench_paper_tables,
     "closed-loop": _bench_closed_loop,
@@ -210,7 +221,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "them for the case, seed, days, weather and panel, and store new ones there "
                    "(dsfd.bench.oracle_cache)")
     p.add_argument("--cycles", type=int, default=None,
-                   help="mqtt: daemon cycles whose publish latency is measured (default 200)")
+                   help="mqtt, bacnet: daemon cycles whose publish / COV latency is measured "
+                   "(default 200, bacnet 100)")
+    p.add_argument("--reads", type=int, default=None,
+                   help="bacnet: ReadPropertyMultiple requests timed (default 500)")
     p.add_argument("--backlog", type=int, default=None,
                    help="mqtt: stored cycles drained after an outage (default 5000)")
     p.add_argument("--weather", default=None, help="weather file or bundled name")
@@ -269,7 +283,7 @@ def run(args: argparse.Namespace) -> int:
         if min(args.seeds, default=-1) < 0:
             print(f"dsfd bench: --seeds {args.seeds}: seeds are 0 or more", file=sys.stderr)
             return 2
-    for name in ("days", "cycles", "backlog", "seeds"):
+    for name in ("days", "cycles", "backlog", "seeds", "reads"):
         value = getattr(args, name)
         if isinstance(value, tuple):
             continue  # a list of seeds, checked above

@@ -84,13 +84,20 @@ def _check_options(args: argparse.Namespace) -> str | None:
 
 
 def _integrations(cfg: PanelConfig, config_path: Path) -> list[Integration]:
-    """What runs beside the loop: the MQTT publisher if the panel has an ``mqtt:`` section."""
-    if cfg.mqtt is None:
-        return []
+    """What runs beside the loop: the MQTT publisher if the panel has an ``mqtt:`` section,
+    the BACnet/IP device if it has a ``bacnet:`` section."""
     from dsfd import __version__
-    from dsfd.integrations.mqtt import publisher_for_run
 
-    return [publisher_for_run(cfg, config_path=config_path, version=__version__)]
+    out: list[Integration] = []
+    if cfg.mqtt is not None:
+        from dsfd.integrations.mqtt import publisher_for_run
+
+        out.append(publisher_for_run(cfg, config_path=config_path, version=__version__))
+    if cfg.bacnet is not None:
+        from dsfd.integrations.bacnet import device_for_run
+
+        out.append(device_for_run(cfg, version=__version__))
+    return out
 
 
 def _until_the_weather_ends(cfg: PanelConfig, opts: RunOptions) -> RunOptions:
@@ -118,6 +125,11 @@ def _announce(cfg: PanelConfig, opts: RunOptions, state_dir: Path, *, temporary:
         print("  simulated plant: nothing is written to hardware")
     print(f"  state directory: {state_dir}"
           + (" (temporary, removed at exit; --state-dir keeps it)" if temporary else ""))
+    bn = cfg.bacnet
+    if bn is not None:
+        print(f"  BACnet/IP device {bn.device_instance} on UDP {bn.bind_address()}: "
+              + ("WRITABLE (priority 1-15 writes hold the panel)" if bn.writable
+                 else "read-only"))
 
 
 def run(args: argparse.Namespace) -> int:

@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
+from dsfd.config.bacnet import Bacnet
 from dsfd.config.calibration import Calibration
 from dsfd.config.control import Control
 from dsfd.config.daemon import DaemonSettings
@@ -355,6 +356,9 @@ class PanelConfig:
     mqtt: Mqtt | None = setting(
         None, doc="Connection to an MQTT broker: state, Home Assistant discovery, commands; "
         "null: none (dsfd.config.mqtt)")
+    bacnet: Bacnet | None = setting(
+        None, doc="BACnet/IP device for the building management system: points, COV, "
+        "priority-array commands; null: none, nothing listens (dsfd.config.bacnet)")
 
     def check(self) -> list[Problem]:
         out = []

@@ -1,6 +1,7 @@
-"""Operator commands: one validation for every source (``dsfd override``/``resume``/``mode``
-and MQTT's ``<base>/cmd/...``). Pure: a panel configuration and a request mapping in, a validated
-:class:`OperatorCommand` or a :class:`CommandError` naming the field and the bad value out.
+"""Operator commands: one validation for every source (``dsfd override``/``resume``/``mode``,
+MQTT's ``<base>/cmd/...`` and writes to the BACnet device's priority arrays). Pure: a panel
+configuration and a request mapping in, a validated :class:`OperatorCommand` or a
+:class:`CommandError` naming the field and the bad value out.
 
 A request is a mapping of fields (JSON-ready, as stored in the ``commands`` table):
 

@@ -74,7 +74,8 @@ class PlantUnderTest(Protocol):
 
 
 class Integration(Protocol):
-    """Something beside the loop that reads what the daemon stores (the MQTT publisher).
+    """Something beside the loop that reads what the daemon stores (the MQTT publisher, the
+    BACnet device).
 
     The CLI builds it and hands it to :func:`serve` (the daemon does not import the
     integrations). It is started once the database is open, told after every stored cycle
@@ -254,11 +255,12 @@ class _Daemon:
             ("devices", new.devices != self.cfg.devices),
             ("daemon.state_directory",
              new.daemon.state_directory != self.cfg.daemon.state_directory),
-            ("mqtt", new.mqtt != self.cfg.mqtt)) if changed]
+            ("mqtt", new.mqtt != self.cfg.mqtt),
+            ("bacnet", new.bacnet != self.cfg.bacnet)) if changed]
         if kept:
             log.warning("reload: %s changed; restart the service to apply", ", ".join(kept))
             new = dataclasses.replace(
-                new, devices=self.cfg.devices, mqtt=self.cfg.mqtt,
+                new, devices=self.cfg.devices, mqtt=self.cfg.mqtt, bacnet=self.cfg.bacnet,
                 daemon=dataclasses.replace(new.daemon,
                                            state_directory=self.cfg.daemon.state_directory))
         note = self.controller.reconfigure(new)
@@ -287,7 +289,8 @@ async def serve(opts: RunOptions, cfg: PanelConfig, *, state_dir: Path,
 
     ``plant`` is the simulated plant of ``--plant sim`` (its driver replaces the devices and
     the clock starts at its start); without it the panel's ``devices:`` are opened.
-    ``integrations`` (the MQTT publisher) run beside the loop, fed from the database.
+    ``integrations`` (the MQTT publisher, the BACnet device) run beside the loop, fed from
+    the database.
     ``clock`` replaces the daemon's clock (tests that step the wall clock).
 
     Raises :class:`~dsfd.storage.lock.StateDirBusyError` before anything is opened if

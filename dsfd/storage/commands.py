@@ -1,7 +1,8 @@
 """The ``commands`` table: how operator requests reach the running daemon, durably and audited.
 
-One path for every source. A front end (``dsfd override``/``resume``/``mode``, and the MQTT
-receiver, :mod:`dsfd.integrations.mqtt.receiver`) validates the request with
+One path for every source. A front end (``dsfd override``/``resume``/``mode``, the MQTT
+receiver, :mod:`dsfd.integrations.mqtt.receiver`, and the BACnet device,
+:mod:`dsfd.integrations.bacnet.device`) validates the request with
 :func:`dsfd.daemon.commands.validate_command` and, if it is well-formed, inserts a
 ``pending`` row with :func:`submit` naming its ``source`` and ``requester``. Every cycle the
 daemon's loop reads the pending rows (:func:`pending`), validates each again against the
@@ -11,9 +12,11 @@ in the same transaction as the cycle's rows
 request the daemon does not pick up within :data:`MAX_AGE_S` is rejected as expired, so a
 command never takes effect long after it was given.
 
-No network listener of the daemon's own: who may write the database, or publish to the
-panel's ``<base>/cmd/`` topics on the broker (its ACL), may command the panel (docs/operating.md,
-"Permissions"; docs/mqtt.md, "Commands over MQTT").
+No network listener of the daemon's own but the optional BACnet device (off by default,
+read-only until ``bacnet.writable``): who may write the database, publish to the panel's
+``<base>/cmd/`` topics on the broker (its ACL) or, with writes on, reach the BACnet port may
+command the panel (docs/operating.md, "Permissions"; docs/mqtt.md, "Commands over MQTT";
+docs/bacnet.md).
 """
 
 from __future__ import annotations

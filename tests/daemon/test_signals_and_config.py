@@ -120,7 +120,8 @@ def test_sighup_keeps_the_old_config_when_the_new_one_is_bad(tmp_path: Path) -> 
     assert sorted(methods) == daemon.cycles_logged == list(range(1, cycles + 1))
 
 
-def test_sighup_keeps_the_state_directory_and_mqtt_until_a_restart(tmp_path: Path) -> None:
+def test_sighup_keeps_the_state_directory_mqtt_and_bacnet_until_a_restart(tmp_path: Path
+                                                                          ) -> None:
     panel = write_panel(tmp_path / "panel.yaml", devices=False)
     doc = yaml.safe_load(panel.read_text())
     state, elsewhere = tmp_path / "state", tmp_path / "elsewhere"
@@ -130,6 +131,7 @@ def test_sighup_keeps_the_state_directory_and_mqtt_until_a_restart(tmp_path: Pat
         await daemon.wait_cycle(2)
         # A broker nothing listens on, another state directory, and the baseline.
         doc["mqtt"] = {"host": "127.0.0.1", "port": free_port()}
+        doc["bacnet"] = {"device_instance": 1, "address": "127.0.0.1", "port": free_port()}
         doc["daemon"]["state_directory"] = str(elsewhere)
         doc["control"]["optimiser"] = "rule"
         panel.write_text(yaml.safe_dump(doc, sort_keys=False))
@@ -142,11 +144,12 @@ def test_sighup_keeps_the_state_directory_and_mqtt_until_a_restart(tmp_path: Pat
 
     daemon = asyncio.run(scenario())
     (kept,) = daemon.events("reload: ")
-    assert kept["event"] == ("reload: daemon.state_directory, mqtt changed; restart the "
-                             "service to apply")
+    assert kept["event"] == ("reload: daemon.state_directory, mqtt, bacnet changed; restart "
+                             "the service to apply")
     (reloaded,) = [r["after_cycle"] for r in daemon.events("configuration reloaded")]
     methods = dict(query(state / "timeseries.sqlite", "SELECT cycle, method FROM decisions"))
     assert all(methods[c] == "rule" for c in methods if c > reloaded)  # the rest applied
     assert not elsewhere.exists()
-    assert not [r for r in daemon.records if "mqtt" in r.get("event", "").lower()
-                and r is not kept]  # no publisher was started by the reload
+    assert not [r for r in daemon.records if ("mqtt" in r.get("event", "").lower()
+                                              or "bacnet" in r.get("event", "").lower())
+                and r is not kept]  # no publisher, no BACnet device started by the reload
