@@ -172,8 +172,16 @@ def _default_text(f: dataclasses.Field) -> str:
 
 def _limits_text(meta: typing.Mapping[str, Any]) -> str | None:
     marks = (("gt", ">"), ("ge", "≥"), ("lt", "<"), ("le", "≤"))
-    parts = [f"{sym} {meta[k]:g}" for k, sym in marks if meta.get(k) is not None]
+    parts = [f"{sym} {_number(meta[k])}" for k, sym in marks if meta.get(k) is not None]
     return ", ".join(parts) or None
+
+
+def _number(value: float) -> str:
+    """A limit as written: whole numbers in full (BACnet's device instance ≤ 4194302 must
+    not read as 4.1943e+06), others in the shortest form."""
+    if isinstance(value, int) or (float(value).is_integer() and abs(value) < 1e15):
+        return str(int(value))
+    return f"{value:g}"
 
 
 def _allowed_text(tp: Any, meta: typing.Mapping[str, Any]) -> str | None:

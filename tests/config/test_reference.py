@@ -114,13 +114,15 @@ def test_every_key_has_a_description_and_every_number_a_unit():
 
 
 def _full_panel() -> dict:
-    """suwon-south with every optional section present (MQTT with TLS, an override input, a
-    louver position feedback register)."""
+    """suwon-south with every optional section present (MQTT with TLS, an override input,
+    actuator position feedback registers, a BACnet device with a foreign-device registration)."""
     data = yaml.safe_load((PANELS / "suwon-south.yaml").read_text(encoding="utf-8"))
     data["mqtt"] = {"host": "broker.example", "tls": {}}
     data["devices"]["entries"][0]["override_input"] = {"table": "coil", "address": 3}
     for actuator in data["devices"]["entries"][0]["actuators"]:
         actuator["feedback"] = {"address": 200 + actuator["address"]}
+    data["bacnet"] = {"device_instance": 41001, "address": "127.0.0.1/8",
+                      "foreign_device": {"bbmd": "127.0.0.2:47808"}}
     panel_from_mapping(data)  # valid as it stands
     return data
 
