@@ -51,6 +51,7 @@ SKIP_REASONS = {
     "needs three panels on a broker",
     "the test suite itself",
     "needs the panel's devices",
+    "takes hours of CPU (the plant oracle)",
 }
 #: The README's first two blocks (no marker line above them; see the module docstring).
 README_TOP = ('replace "--cycles 540" "--cycles 20"', "skip: the test suite itself")
