@@ -1,6 +1,6 @@
 """Local thermal comfort near the panel: draught from supply air, radiant asymmetry of the pane.
 
-docs/model.md#thermal-comfort, after ISO 7730:2005 (local thermal discomfort, §6 and Annex A)
+docs/model.md#thermal-comfort, after ISO 7730:2005 §6 and Annex A (local thermal discomfort)
 and ISO 7726:1998 (plane radiant temperature). Temperatures in °C at this module's edge
 (limits are differences in K), as the config gives them.
 """
