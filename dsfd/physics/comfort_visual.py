@@ -140,8 +140,12 @@ def eye_illuminance_lx(
 
 
 def dgp_simplified(e_v_lx: ArrayLike) -> FloatArray:
-    """Simplified daylight glare probability DGPs = 6.22e-5 E_v + 0.184 [-] (Wienold 2009)."""
-    return DGP_SLOPE_PER_LX * np.asarray(e_v_lx, dtype=float) + DGP_INTERCEPT
+    """Simplified daylight glare probability DGPs = 6.22e-5 E_v + 0.184 [-] (Wienold 2009).
+
+    Capped at 1, a probability (the line passes 1 at 13 100 lx, far outside the range the
+    formula was fitted on, which excludes the sun in view).
+    """
+    return np.minimum(DGP_SLOPE_PER_LX * np.asarray(e_v_lx, dtype=float) + DGP_INTERCEPT, 1.0)
 
 
 def illuminance_for_dgp(dgp: ArrayLike) -> FloatArray:

@@ -136,5 +136,6 @@ def test_dgps_class_limits_of_en17037_and_wienold():
     assert ev == pytest.approx([2668.8, 3472.7, 4276.5], abs=0.1)
     assert dgp_simplified(ev) == pytest.approx(limits)
     assert dgp_simplified(0.0) == pytest.approx(0.184)  # no light: the model's floor
+    assert dgp_simplified(50000.0) == 1.0  # a probability
     assert [glare_class(float(dgp_simplified(e))) for e in (2000, 3000, 4000, 5000)] == [
         "high", "medium", "minimum", "none"]
