@@ -15,7 +15,6 @@ import numpy as np
 from dsfd.physics.comfort_geometry import window_view_factor
 from dsfd.physics.comfort_thermal import asymmetry_limit_k, radiant_asymmetry_k, supply_air_min_c
 from dsfd.physics.comfort_visual import dgp_simplified, eye_illuminance_lx
-from dsfd.physics.optics import layer_absorption
 
 if TYPE_CHECKING:
     from dsfd.config.panel import PanelConfig
@@ -74,11 +73,7 @@ def comfort_check(
     Outside occupancy the quantities are computed and no limit is named.
     """
     f = forcing.window(0, 1)
-    common = dict(beam=f.beam_wm2, diffuse=f.diffuse_wm2, cos_aoi=np.cos(np.radians(f.aoi_deg)),
-                  phi=math.radians(phi_deg), profile=np.radians(f.profile_deg),
-                  diffuse_ground=f.ground_wm2 if optics.split_diffuse else None)
-    solar = layer_absorption(**common, glass=optics.glass_solar, louver=optics.louver_solar)
-    vis = layer_absorption(**common, glass=optics.glass_visible, louver=optics.louver_visible)
+    solar, vis = optics.layers(f, np.asarray(math.radians(phi_deg)))
     f_eye, f_body = view_factors(cfg)
     e_v = eye_illuminance_lx(transmitted_wm2=vis.transmitted,
                              transmitted_beam_wm2=vis.transmitted_beam, view_factor=f_eye,
