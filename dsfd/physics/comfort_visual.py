@@ -33,8 +33,8 @@ FloatArray = NDArray[np.float64]
 #: Wienold (2009), simplified daylight glare probability DGPs = a E_v + b.
 DGP_SLOPE_PER_LX = 6.22e-5
 DGP_INTERCEPT = 0.184
-#: EN 17037:2018 Annex C, glare protection: the DGP not exceeded for more than 5 % of the
-#: occupied time, best class first.
+#: EN 17037:2018, protection from glare: the DGP that its three levels allow to be exceeded in
+#: no more than 5 % of the occupied time, best level first.
 EN17037_GLARE_CLASSES: tuple[tuple[str, float], ...] = (
     ("high", 0.35), ("medium", 0.40), ("minimum", 0.45))
 

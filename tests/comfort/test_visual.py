@@ -4,7 +4,7 @@ Independent references: a 2-D ray cast through a stack of flat slats written her
 principles; the textbook rule for horizontal slats (the direct beam is excluded once the
 profile angle reaches atan(s/w): the slat's shadow on the vertical plane, w tan(profile),
 covers the pitch; ASHRAE Handbook Fundamentals ch. 15, shading by horizontal louvers); a
-numerical integral of the view-factor kernel; Wienold's DGPs with the EN 17037:2018 Annex C
+numerical integral of the view-factor kernel; Wienold's DGPs with the EN 17037:2018
 glare classes.
 """
 
@@ -127,7 +127,7 @@ def test_a_lambertian_wall_filling_the_view_gives_its_exitance():
 
 
 def test_dgps_class_limits_of_en17037_and_wienold():
-    # Wienold (2009): DGPs = 6.22e-5 E_v + 0.184; EN 17037:2018 Annex C glare protection
+    # Wienold (2009): DGPs = 6.22e-5 E_v + 0.184; EN 17037:2018 protection-from-glare
     # classes high / medium / minimum at DGP 0.35 / 0.40 / 0.45 (Wienold's "imperceptible",
     # "perceptible", "disturbing" boundaries). E_v at the boundaries by hand:
     # (0.35 - 0.184) / 6.22e-5 = 2668.8 lx, 0.40 -> 3472.7 lx, 0.45 -> 4276.5 lx.
