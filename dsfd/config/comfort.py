@@ -28,7 +28,7 @@ from typing import Literal
 
 from dsfd.config.loader import Problem, setting
 
-__all__ = ["DAY_KEYS", "Comfort", "Occupancy", "parse_interval"]
+__all__ = ["DAY_KEYS", "DRAUGHT_RATE_MAX_PCT", "Comfort", "Occupancy", "parse_interval"]
 
 #: Weekday keys, Monday first (``datetime.date.weekday`` order).
 DAY_KEYS = ("mon", "tue", "wed", "thu", "fri", "sat", "sun")
