@@ -17,6 +17,7 @@ a :class:`Problem` names the offending key relative to that dataclass.
 from __future__ import annotations
 
 import dataclasses
+import datetime
 import math
 import types
 import typing
@@ -247,6 +248,8 @@ def _convert(tp: Any, value: Any, path: str, issues: list[ConfigIssue], meta: Ma
     if tp is str:
         if isinstance(value, str):
             return value
+        if isinstance(value, datetime.date):  # YAML 1.1 reads an unquoted 2026-12-25 as a date
+            return value.isoformat()
         issues.append(ConfigIssue(path, value, "expected a string"))
         return _ABSENT
     raise TypeError(f"unsupported settings type {tp!r} at {path}")  # programming error

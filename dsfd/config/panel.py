@@ -14,6 +14,7 @@ from typing import Literal
 
 from dsfd.config.bacnet import Bacnet
 from dsfd.config.calibration import Calibration
+from dsfd.config.comfort import Comfort, Occupancy
 from dsfd.config.control import Control
 from dsfd.config.daemon import DaemonSettings
 from dsfd.config.devices import Devices
@@ -335,6 +336,11 @@ class PanelConfig:
     openings: Openings = setting(doc="Dampers and airflow boundary")
     room: Room = setting(default_factory=Room, doc="Room-side boundary")
     daylight: Daylight = setting(default_factory=Daylight, doc="Daylighting proxy")
+    occupancy: Occupancy | None = setting(
+        None, doc="Weekly occupancy schedule in local time; null: never occupied, no comfort "
+        "limit applies (dsfd.config.comfort)")
+    comfort: Comfort = setting(default_factory=Comfort, doc="Comfort limits while occupied: "
+                               "direct sun, glare, draught, radiant asymmetry")
     model: ModelOptions = setting(default_factory=ModelOptions, doc="Lumped-model options "
                                   "(dsfd.config.model)")
     parameters: Parameters = setting(doc="Calibrated parameters: defaults and bounds")

@@ -42,7 +42,9 @@ import numpy as np
 from dsfd.config.control import Control
 from dsfd.config.panel import PanelConfig
 from dsfd.control.baseline import rule_decision
+from dsfd.control.comfort import ComfortCheck, comfort_check
 from dsfd.control.objective import is_heating
+from dsfd.control.occupancy import occupied
 from dsfd.control.optimiser import ControlProblem, Decision, MpcOptimiser
 from dsfd.daemon.calibration import CalibrationStage, UpdateOutcome
 from dsfd.daemon.clock import Clock, Slot, WallClockWatch
@@ -169,6 +171,9 @@ class Controller:
         mark = time.perf_counter()
         horizon_x = self._horizon_end(estimate, forecast, applied)
         t["predict"] = _ms(mark)
+        mark = time.perf_counter()
+        comfort = self._comfort(estimate, forecast, safe.command, now_s)
+        t["comfort"] = _ms(mark)
 
         outcome = CycleOutcome(
             cycle=self.cycles, slot=slot.index, skipped_slots=slot.skipped, time_s=now_s,
@@ -181,7 +186,7 @@ class Controller:
             mode_command_id=objective_by,
             run_elapsed_s=round(slot.deadline_s - self._grid0_s, 6),
             events=[*events, *held.events, *_drain(self.calibration.events)],
-            command_results=held.results)
+            command_results=held.results, comfort=comfort)
         mark = time.perf_counter()
         outcome.store_ok = await self._store(outcome, weather)
         t["store"] = _ms(mark)
@@ -322,6 +327,24 @@ class Controller:
                                coupling_tol_k=self.cfg.control.screening_tolerance_k)
         except (ValueError, ArithmeticError, np.linalg.LinAlgError):
             log.exception("horizon prediction failed")
+            return None
+
+    def _comfort(self, estimate: StateEstimate, forecast: Forcing | None, command: Command,
+                 now_s: float) -> ComfortCheck | None:
+        """The comfort limits ``command`` would break (docs/model.md#comfort), for the trace:
+        the pane and the supply air taken as the estimated x3 and cavity air x5 now."""
+        if forecast is None or not estimate.usable:
+            return None
+        is_occupied = bool(occupied(now_s, occupancy=self.cfg.occupancy,
+                                    utc_offset_h=self.cfg.site.utc_offset_h))
+        try:
+            return comfort_check(self.cfg, self.optics, forecast, phi_deg=command.phi_deg,
+                                 afr=command.afr, or_pct=command.or_pct,
+                                 occupied=is_occupied,
+                                 t_pane_c=float(estimate.x_k[2]) - T_ZERO,
+                                 t_supply_c=float(estimate.x_k[4]) - T_ZERO)
+        except (ValueError, ArithmeticError):
+            log.exception("comfort check failed")
             return None
 
     def _optimiser(self, problem: ControlProblem) -> Callable[[], Decision]:

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from dsfd.control.comfort import ComfortCheck
 from dsfd.control.optimiser import Decision
 from dsfd.daemon.calibration import UpdateOutcome
 from dsfd.daemon.hold import Hold
@@ -63,6 +64,9 @@ class CycleOutcome:
     events: list[tuple[str, str, str]] = field(default_factory=list)
     #: Operator commands handled this cycle: (command_id, status, reason).
     command_results: list[tuple[int, str, str]] = field(default_factory=list)
+    #: The comfort limits the command would break (docs/model.md#comfort); informative
+    #: only, the decision ignores them. None without a forecast or a usable estimate.
+    comfort: ComfortCheck | None = None
 
     @property
     def cycle_ms(self) -> float:

@@ -38,6 +38,7 @@ from dsfd.physics.longwave import (
 )
 from dsfd.physics.optics import (
     NO_LOUVER,
+    LayerSources,
     LouverOptics,
     SlatSkyGround,
     glass_triples,
@@ -281,6 +282,23 @@ class FacadeOptics:
         r = cavity_exchange_matrix(self.eps_1b, ir.eps_L, ir.tau_L, self.eps_2f)
         return np.stack([r[..., 0, 1], r[..., 0, 2], r[..., 1, 2]], axis=-1)
 
+    def layers(self, forcing: Forcing,
+               phi_rad: np.ndarray) -> tuple[LayerSources, LayerSources]:
+        """The multilayer balance (solar, visible) for louver angles ``phi_rad`` [rad],
+        broadcast against the steps (docs/model.md#multilayer, docs/model.md#louver-diffuse)."""
+        common = dict(beam=forcing.beam_wm2, diffuse=forcing.diffuse_wm2,
+                      cos_aoi=np.cos(np.radians(forcing.aoi_deg)), phi=phi_rad,
+                      profile=np.radians(forcing.profile_deg))
+        split_sol = split_vis = None
+        if self.split_diffuse:
+            split_sol, split_vis = self.sky_ground(phi_rad)
+            common["diffuse_ground"] = forcing.ground_wm2
+        sol = layer_absorption(**common, glass=self.glass_solar, louver=self.louver_solar,
+                               sky_ground=split_sol)
+        vis = layer_absorption(**common, glass=self.glass_visible, louver=self.louver_visible,
+                               sky_ground=split_vis)
+        return sol, vis
+
     def loads(self, forcing: Forcing, phi_rad: np.ndarray | float) -> OpticalLoads:
         """Loads for louver angles ``phi_rad`` [rad] (scalar or shape (m,)) over all steps.
 
@@ -288,18 +306,7 @@ class FacadeOptics:
         """
         phi = np.asarray(phi_rad, float)
         phi_b = phi[..., None]  # broadcast against the step axis
-        cos_aoi = np.cos(np.radians(forcing.aoi_deg))
-        profile = np.radians(forcing.profile_deg)
-        common = dict(beam=forcing.beam_wm2, diffuse=forcing.diffuse_wm2, cos_aoi=cos_aoi,
-                      phi=phi_b, profile=profile)
-        split_sol = split_vis = None
-        if self.split_diffuse:
-            split_sol, split_vis = self.sky_ground(phi_b)
-            common["diffuse_ground"] = forcing.ground_wm2
-        sol = layer_absorption(**common, glass=self.glass_solar, louver=self.louver_solar,
-                               sky_ground=split_sol)
-        vis = layer_absorption(**common, glass=self.glass_visible, louver=self.louver_visible,
-                               sky_ground=split_vis)
+        sol, vis = self.layers(forcing, phi_b)
         shape = np.broadcast_shapes(phi_b.shape, forcing.beam_wm2.shape)
         sources = np.stack([np.broadcast_to(s, shape) for s in (sol.s1, sol.s2, sol.s3,
                                                                   sol.s4)], axis=-1)
