@@ -222,6 +222,11 @@ class FlowTerms(NamedTuple):
     probe_ratio: np.ndarray  # p: the probe's excess over the inflow per unit of x5's [-]
 
 
+#: Regimes whose air enters through one skin and leaves through the other, crossing the
+#: louver: the supply and exhaust diagonals (docs/model.md#regimes).
+THROUGH_CAVITY_REGIMES = (5, 6, 7, 8)
+
+
 def profile_ratios(nc: NetworkConstants, lap0: np.ndarray,
                    g_flow: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """k and p of the cavity air profile (both 1 well mixed) for the flow conductance
@@ -254,6 +259,11 @@ def with_flow(nc: NetworkConstants, t5: np.ndarray, setup: FlowSetup, lap0: np.n
     m_in, t_inflow = inflow(setup, pf)
     g_flow = nc.cp_air * m_in / nc.geom.facade_area_m2
     k, p = profile_ratios(nc, lap0, g_flow)
+    # The probe's single-column profile holds where the air crosses the cavity, inlet on one
+    # skin and outlet on the other (5–8); where it runs along one side of the louver (1–4)
+    # or through all four dampers (9) the probe reads both sub-cavities and p = 1 (measured:
+    # docs/model.md#cavity-probe).
+    p = np.where(np.isin(setup.regime, THROUGH_CAVITY_REGIMES), p, 1.0)
     g_adv = k * g_flow
     lap = lap0.copy()
     q = q0.copy()

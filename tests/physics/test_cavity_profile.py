@@ -113,3 +113,26 @@ def test_the_mid_height_probe_limits():
     p = probe_excess_ratio(a)
     assert np.all(p >= 1.0) and p.max() == pytest.approx(1.1466, abs=1e-3)
     assert probe_excess_ratio(3.0, 1.0) == pytest.approx(outlet_excess_ratio(3.0))
+
+
+def test_the_model_reads_its_probe_where_the_air_crosses_the_cavity(suwon):
+    """x5_probe_k = T_in + p(a)(x5 − T_in) in a through-cavity regime (7: outdoor air in at
+    the exterior bottom, out at the interior top), with a and T_in from the step's own flow;
+    the reading is x5 itself where the air runs along one side (1) or without flow (10)."""
+    mid = dataclasses.replace(suwon, model=dataclasses.replace(
+        suwon.model, cavity_air_probe="mid_height"))
+    for regime in (7, 1, 10):
+        model, inp, _, res = _one_step(mid, regime)["exponential"]
+        x5, probe = float(res.x_next[0, 4]), float(res.x5_probe_k[0])
+        if regime != 7:
+            assert probe == x5
+            continue
+        m_in = float(np.clip(res.flow.m_dot, 0, None).sum())
+        assert m_in > 0
+        theta, nc = model.default_theta(), model.nc
+        a = ((theta[Param.H_CA1] + nc.slat_area_ratio * theta[Param.H_CA2]
+              + theta[Param.H_CA3]) / (nc.cp_air * m_in / nc.geom.facade_area_m2))
+        t_in = float(inp.t_out_k)  # supply air comes from outdoors
+        assert probe == pytest.approx(t_in + float(probe_excess_ratio(a)) * (x5 - t_in),
+                                      rel=1e-9)
+        assert abs(probe - x5) > 0.05  # the correction is there, not a rounding
