@@ -263,7 +263,8 @@ def with_flow(nc: NetworkConstants, t5: np.ndarray, setup: FlowSetup, lap0: np.n
     # skin and outlet on the other (5–8); where it runs along one side of the louver (1–4)
     # or through all four dampers (9) the probe reads both sub-cavities and p = 1 (measured:
     # docs/model.md#cavity-probe).
-    p = np.where(np.isin(setup.regime, THROUGH_CAVITY_REGIMES), p, 1.0)
+    if nc.probe_height_frac is not None:
+        p = np.where(np.isin(setup.regime, THROUGH_CAVITY_REGIMES), p, 1.0)
     g_adv = k * g_flow
     lap = lap0.copy()
     q = q0.copy()
