@@ -77,3 +77,14 @@ def test_a_seed_list_is_for_the_closed_loop_only():
     bad = subprocess.run([sys.executable, "-m", "dsfd", "bench", "closed-loop", "--seeds",
                           "one"], capture_output=True, text=True, timeout=60)
     assert bad.returncode == 2 and "a count (e.g. 5) or a list" in bad.stderr
+
+
+def test_a_file_that_is_no_oracle_cache_is_refused_naming_it(tmp_path):
+    bad = tmp_path / "results.json"
+    bad.write_text('{"target": "closed-loop"}')
+    proc = subprocess.run([sys.executable, "-m", "dsfd", "bench", "closed-loop", "--case",
+                           "clear-heating", "--oracle-cache", str(bad)],
+                          capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 2
+    assert f"{bad}: not a plant-oracle cache" in proc.stderr
+    assert bad.read_text() == '{"target": "closed-loop"}'  # nothing written over it
