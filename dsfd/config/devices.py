@@ -358,6 +358,10 @@ class Devices:
                                     unit="s", gt=0, le=3600)
     entries: tuple[DeviceConfig, ...] = setting(doc="The devices, Modbus and serial")
 
+    def sensor_signals(self) -> frozenset[str]:
+        """Sensor signals the devices deliver together."""
+        return frozenset(s for d in self.entries for s in d.signal_names())
+
     def by_name(self, name: str) -> DeviceConfig:
         for d in self.entries:
             if d.name == name:

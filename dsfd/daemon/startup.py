@@ -54,7 +54,7 @@ def runtime_problems(cfg: PanelConfig, *, simulated_plant: bool, dry_run: bool
                                "the Modbus devices and the weather station (or use --plant "
                                "sim for a simulated plant)"))
         return out
-    delivered = {s for e in dev.entries for s in e.signal_names()}
+    delivered = dev.sensor_signals()
     for i, name in enumerate(cfg.safety.fault_signals):
         if name not in delivered:
             out.append(ConfigIssue(f"safety.fault_signals[{i}]", name,

@@ -58,7 +58,7 @@ def configured_signals(cfg: PanelConfig) -> frozenset[str]:
     """Sensor signals the panel's devices deliver (none for a simulation-only panel)."""
     if cfg.devices is None:
         return frozenset()
-    return frozenset(n for d in cfg.devices.entries for n in d.signal_names())
+    return cfg.devices.sensor_signals()
 
 
 @dataclass
