@@ -28,6 +28,8 @@ YAML shape (every key optional; the defaults suit a 1-minute controller cycle)::
       broyden_updates: 1          # Broyden Jacobian updates between finite differences
       identifiability_sd_ratio: 1.0  # < 1: a parameter moves only where the window determines it
       measurement_gain: [1, 0.3, 0.3, 1, 1]  # state update: weight of a reading of x1..x5
+      reading_offset_tracking_s: [0, 0, 0, 300, 300]  # per-regime reading offsets of x1..x5
+      reading_offset_memory_s: 3600   # ... decay of a regime's offsets while it is not applied
       spike_threshold_k: 3.0      # isolated temperature jumps treated as missing
       fixed: []                   # parameters never calibrated on this panel
 
@@ -139,6 +141,20 @@ class Calibration:
         "through noise σ_y scales as σ_q/σ_y. The inner panes x2, x3 sit behind the cavity, "
         "their one-step model error is far below the 0.2 K thermocouple noise, and a 300 s "
         "low-pass let that noise walk their offsets", unit="s", ge=0, le=86400)
+    reading_offset_tracking_s: tuple[float, ...] = setting(
+        (0.0, 0.0, 0.0, 300.0, 300.0), doc="Time constant of the reading offsets of x1..x5 "
+        "(one per sensor; 0: none): the output-disturbance model of the daemon's state "
+        "update. Per commanded airflow regime, each offset follows the difference between the "
+        "reading and the model's one-step prediction through a first-order low-pass; the "
+        "predictions of the readings (one step and the horizon) add it, and the state takes "
+        "the reading less it. It carries the static error of the fast nodes (the cavity air "
+        "relaxes within a minute to a quasi-steady value the lumped balance misplaces by "
+        "regime, docs/model.md#reading-offsets) without moving the heat into the room", unit="s",
+        ge=0, le=86400)
+    reading_offset_memory_s: float = setting(
+        3600.0, doc="A regime's reading offsets decay towards 0 with this time constant while "
+        "another regime is applied (an offset seen long ago is no longer known)", unit="s",
+        gt=0, le=864000)
     measurement_gain: tuple[float, ...] = setting(
         (1.0, 0.3, 0.3, 1.0, 1.0), doc="State update: weight of a new reading of x1..x5 (one "
         "per state) against the model's one-step prediction (1 = take the reading as it is, "
@@ -170,6 +186,10 @@ class Calibration:
         if len(self.innovation_smoothing_s) != 4:
             out.append(Problem("innovation_smoothing_s", list(self.innovation_smoothing_s),
                                "need one time constant per offset node x1..x4"))
+        if len(self.reading_offset_tracking_s) != 5:
+            out.append(Problem("reading_offset_tracking_s",
+                               list(self.reading_offset_tracking_s),
+                               "need one time constant per measured state x1..x5"))
         if len(self.measurement_gain) != 5:
             out.append(Problem("measurement_gain", list(self.measurement_gain),
                                "need one gain per measured state x1..x5"))

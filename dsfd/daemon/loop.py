@@ -322,9 +322,12 @@ class Controller:
         if forecast is None or applied is None or not estimate.usable:
             return None
         try:
-            return horizon_end(self.observer.model, self.optics, forecast, estimate.x_k,
-                               applied, self.calibration.theta, self.calibration.offsets,
-                               coupling_tol_k=self.cfg.control.screening_tolerance_k)
+            x_end = horizon_end(self.observer.model, self.optics, forecast, estimate.x_k,
+                                applied, self.calibration.theta, self.calibration.offsets,
+                                coupling_tol_k=self.cfg.control.screening_tolerance_k)
+            if x_end is not None:  # what the sensors will read (docs/model.md#reading-offsets)
+                x_end[:5] += self.observer.reading_offset_k(applied.afr)
+            return x_end
         except (ValueError, ArithmeticError, np.linalg.LinAlgError):
             log.exception("horizon prediction failed")
             return None

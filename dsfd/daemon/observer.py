@@ -22,6 +22,11 @@ import numpy as np
 from dsfd.drivers.base import Command
 from dsfd.estimation.observer import fill_state, probe_to_state
 from dsfd.estimation.params import with_offsets
+from dsfd.estimation.reading_offsets import (
+    initial_reading_offsets,
+    reading_offset,
+    track_reading_offsets,
+)
 from dsfd.physics.constants import T_ZERO
 from dsfd.physics.coupling import StepInputs
 from dsfd.physics.forcing import FacadeOptics, Forcing, step_inputs
@@ -96,10 +101,17 @@ class StateObserver:
         self.has_louver = model.cfg.louver is not None
         self._x: np.ndarray | None = None
         self._age = np.full(5, _NEVER)
+        self._offsets = initial_reading_offsets()
 
     def reset(self) -> None:
-        """Forget the previous estimate (after a gap in the cycles)."""
+        """Forget the previous estimate and the reading offsets (after a gap in the cycles)."""
         self._x = None
+        self._offsets = initial_reading_offsets()
+
+    def reading_offset_k(self, regime: int) -> np.ndarray:
+        """The reading offsets of x1..x5 [K] under commanded ``regime``
+        (docs/model.md#reading-offsets): what a prediction of the readings adds."""
+        return reading_offset(self._offsets, regime)
 
     def update(self, y_c: dict[str, float], *, step: StepInputs | None,
                applied: Command | None, theta: np.ndarray,
@@ -132,7 +144,10 @@ class StateObserver:
                 x_pred = res.x_next[0]
                 readings = x_pred.copy()
                 readings[4] = res.x5_probe_k[0]
-                y = probe_to_state(y[None], res.x_next[:, 4], res.x5_probe_k)[0]
+                offset = self.reading_offset_k(applied.afr)
+                readings[:5] += offset
+                self._track_offsets(applied.afr, y - readings[:5])
+                y = probe_to_state((y - offset)[None], res.x_next[:, 4], res.x5_probe_k)[0]
                 prediction = StatePrediction(
                     readings, abs(float(res.v_cav_ms[0])),
                     {"q_cv_rd": float(res.q_cv_rd_w[0]), "q_sol_trans": float(res.q_sol_w[0]),
@@ -159,6 +174,15 @@ class StateObserver:
         self._x = x if np.all(np.isfinite(x)) else None
         return StateEstimate(x, tuple(int(min(a, _NEVER)) for a in self._age), not why, why,
                              prediction)
+
+
+    def _track_offsets(self, regime: int, innovation_k: np.ndarray) -> None:
+        cal = self.model.cfg.calibration
+        self._offsets = track_reading_offsets(
+            self._offsets, regime=regime, innovation_k=innovation_k,
+            step_s=self.model.cfg.model.step_s,
+            tracking_s=np.asarray(cal.reading_offset_tracking_s, float),
+            memory_s=cal.reading_offset_memory_s, clip_k=cal.spike_threshold_k)
 
 
 def horizon_end(model: LumpedModel, optics: FacadeOptics, forecast: Forcing, x_k: np.ndarray,
