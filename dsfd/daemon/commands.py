@@ -51,6 +51,7 @@ __all__ = [
     "OCCUPANCY_STATES",
     "CommandError",
     "OperatorCommand",
+    "occupancy_request",
     "parse_duration",
     "resolve_until",
     "validate_command",
@@ -171,6 +172,25 @@ def validate_command(cfg: PanelConfig, request: Mapping[str, Any]) -> OperatorCo
     if afr == CLOSED_REGIME and or_pct is None:
         or_pct = 0.0
     return OperatorCommand("override", hold_s=hold_s, phi_deg=phi, afr=afr, or_pct=or_pct)
+
+
+def occupancy_request(text: str) -> dict[str, Any]:
+    """The request of an occupancy command written out: ``"occupied until 18:00"``,
+    ``"unoccupied until 2026-12-01T08:00"``, ``"auto"`` (the CLI's words, MQTT's payload).
+    :class:`CommandError` if it is not of that form; the fields are checked by
+    :func:`validate_command`."""
+    words = text.split()
+    if not words:
+        raise CommandError("state", text, f"expected one of {', '.join(OCCUPANCY_STATES)}, "
+                           "e.g. 'occupied until 18:00'")
+    request: dict[str, Any] = {"command": "occupancy", "state": words[0]}
+    rest = words[1:]
+    if rest and (rest[0] != "until" or len(rest) != 2):
+        raise CommandError("until", " ".join(rest), "expected 'until TIME' after the state, "
+                           "e.g. 'occupied until 18:00'")
+    if rest:
+        request["until"] = rest[1]
+    return request
 
 
 def _occupancy(request: Mapping[str, Any]) -> OperatorCommand:
