@@ -41,6 +41,7 @@ from dataclasses import dataclass
 from typing import Literal, get_args
 
 __all__ = [
+    "BIT_TABLES",
     "MAX_READ_COUNT",
     "MAX_WRITE_COUNT",
     "DataType",
@@ -61,7 +62,10 @@ __all__ = [
     "register_count",
 ]
 
-Table = Literal["input", "holding"]
+Table = Literal["input", "holding", "coil", "discrete_input"]
+#: Tables of single bits (FC 1 and 2): a point there is one bit, 0 or 1, before scale and
+#: offset; ``data_type``, the orders and ``nan_value`` do not apply.
+BIT_TABLES = frozenset({"coil", "discrete_input"})
 DataType = Literal["int16", "uint16", "int32", "uint32", "float32"]
 Order = Literal["big", "little"]
 
@@ -96,8 +100,9 @@ class RegisterPoint:
         Signal name (``dsfd.signals``), used in error details.
     address : int
         First register, 0-based protocol address (0..65535).
-    table : {"input", "holding"}
-        Register table; actuators live in holding registers.
+    table : {"input", "holding", "coil", "discrete_input"}
+        Register table (actuators live in holding registers), or a bit table: a coil
+        (FC 1) or discrete input (FC 2) is one bit, read as 0 or 1.
     data_type : {"int16", "uint16", "int32", "uint32", "float32"}
         Raw type on the device.
     word_order, byte_order : {"big", "little"}
@@ -133,6 +138,8 @@ class RegisterPoint:
             raise ValueError(f"{self.name}: scale must be finite and non-zero")
         if not math.isfinite(self.offset):
             raise ValueError(f"{self.name}: offset must be finite")
+        if self.nan_value is not None and self.is_bit:
+            raise ValueError(f"{self.name}: a {self.table} has no nan_value")
         if self.nan_value is not None:
             bits = 16 * self.count
             if not -(1 << (bits - 1)) <= self.nan_value < (1 << bits):
@@ -141,9 +148,14 @@ class RegisterPoint:
             object.__setattr__(self, "nan_value", self.nan_value & ((1 << bits) - 1))
 
     @property
+    def is_bit(self) -> bool:
+        """True for a coil or discrete input (one bit, :data:`BIT_TABLES`)."""
+        return self.table in BIT_TABLES
+
+    @property
     def count(self) -> int:
-        """Registers occupied (1 or 2)."""
-        return _LAYOUT[self.data_type][1]
+        """Registers occupied (1 or 2); a bit point occupies one bit address."""
+        return 1 if self.is_bit else _LAYOUT[self.data_type][1]
 
     @property
     def end(self) -> int:
@@ -151,7 +163,10 @@ class RegisterPoint:
         return self.address + self.count
 
     def where(self) -> str:
-        """Short location for error details, e.g. ``input register 10 (float32)``."""
+        """Short location for error details, e.g. ``input register 10 (float32)``,
+        ``discrete input 3``."""
+        if self.is_bit:
+            return f"{self.table.replace('_', ' ')} {self.address}"
         return f"{self.table} register {self.address} ({self.data_type})"
 
 
@@ -210,21 +225,30 @@ def decode(point: RegisterPoint, registers: Sequence[int]) -> float:
     """Engineering value of ``registers`` [unit of the signal].
 
     Returns NaN for the ``nan_value`` code; a float32 NaN/±inf passes through as non-finite.
-    The caller decides what a non-finite value means (dsfd: quality NOT_FINITE).
+    The caller decides what a non-finite value means (dsfd: quality NOT_FINITE). A bit
+    point's one value is 0 or 1 (any non-zero bit is 1).
     """
+    if point.is_bit:
+        _check_registers(point, registers)
+        return float(registers[0] != 0) * point.scale + point.offset
     if matches_nan_value(point, registers):
         return math.nan
     return float(decode_raw(point, registers)) * point.scale + point.offset
 
 
 def encode(point: RegisterPoint, value: float) -> list[int]:
-    """Registers holding engineering ``value`` (inverse of :func:`decode`).
+    """Registers holding engineering ``value`` (inverse of :func:`decode`); a bit point's
+    one value 0 or 1.
 
     Integer types round to the nearest raw step; a value whose raw number does not fit
     the type raises ``ValueError`` naming the point. Float32 accepts NaN (emulators use it).
     """
     fmt, count = _LAYOUT[point.data_type]
     raw = (value - point.offset) / point.scale
+    if point.is_bit:
+        if raw not in (0.0, 1.0):
+            raise ValueError(f"{point.name}: {value!r} is no bit (raw {raw!r}, expected 0 or 1)")
+        return [int(raw)]
     try:
         if fmt == "f":
             packed = struct.pack(">f", raw)
@@ -278,8 +302,10 @@ class RegisterBlock:
         return list(registers[start:start + point.count])
 
     def where(self) -> str:
-        """E.g. ``input registers 0..11``."""
-        return f"{self.table} registers {self.address}..{self.end - 1}"
+        """E.g. ``input registers 0..11``, ``coils 4..5``."""
+        what = {"coil": "coils", "discrete_input": "discrete inputs"}.get(
+            self.table, f"{self.table} registers")
+        return f"{what} {self.address}..{self.end - 1}"
 
 
 def plan_reads(points: Iterable[RegisterPoint], *, max_gap: int = 0,

@@ -60,12 +60,15 @@ class Signal:
     integer: bool = False
 
     def plausible(self, value: float) -> bool:
-        """True if ``value`` [unit] lies inside the plausibility range (NaN is not)."""
-        return self.lower <= value <= self.upper
+        """True if ``value`` [unit] lies inside the plausibility range (NaN is not) and,
+        for an integer signal, is a whole number."""
+        return self.lower <= value <= self.upper and (not self.integer or value == int(value))
 
 
-def _sensor(name: str, unit: str, lower: float, upper: float, doc: str) -> Signal:
-    return Signal(name=name, role="sensor", unit=unit, lower=lower, upper=upper, doc=doc)
+def _sensor(name: str, unit: str, lower: float, upper: float, doc: str, *,
+            integer: bool = False) -> Signal:
+    return Signal(name=name, role="sensor", unit=unit, lower=lower, upper=upper, doc=doc,
+                  integer=integer)
 
 
 # Glass and slat temperatures: a dark slat or an absorbing pane in summer sun reaches 70-90 °C;
@@ -86,6 +89,10 @@ _SENSORS = (
     _sensor("v_cav_ms", "m/s", 0.0, 10.0, "Cavity air speed (anemometer, unsigned)"),
     _sensor("rh_pct", "%", 0.0, 100.0, "Outdoor relative humidity"),
     _sensor("pressure_hpa", "hPa", 800.0, 1100.0, "Station air pressure"),
+    # A presence sensor or the BMS's occupancy flag; while GOOD it overrides the schedule
+    # (docs/model.md#occupancy). A register reading 0.5 or 2 is a mis-mapping, not a state.
+    _sensor("occupied", "1", 0.0, 1.0, "Room behind the panel occupied: 1 yes, 0 no "
+            "(presence sensor or BMS flag)", integer=True),
 )
 
 _ACTUATORS = (

@@ -116,7 +116,9 @@ class EmulatedModbusDevice:
         # SimDevice rejects empty blocks; one invalid register keeps an unused table empty.
         def bits(table: str) -> list[SimData]:
             oi = self.override_input
-            last = oi.address if oi is not None and oi.table == table else 0
+            used = [p.address for p in self.points.values() if p.table == table]
+            last = max([0, *used, *([oi.address] if oi is not None and oi.table == table
+                                    else [])])
             return [SimData(0, count=16 * (last // 16 + 1), values=False,
                             datatype=DataType.BITS)]
 
@@ -271,10 +273,13 @@ class EmulatedModbusDevice:
         p = self.points[name]
         if len(registers) != p.count:
             raise ValueError(f"{name} needs {p.count} registers")
+        values: list[int] | list[bool] = list(registers)
+        if p.is_bit:  # the bit tables hold booleans
+            values = [bool(r) for r in registers]
         self._internal = True
         try:
             await self._require_server().async_setValues(self.device_id, _FC_READ[p.table],
-                                                         p.address, list(registers))
+                                                         p.address, values)
         finally:
             self._internal = False
 

@@ -169,7 +169,8 @@ def test_nan_value_matches_bit_pattern_after_reordering() -> None:
 @pytest.mark.parametrize("kw", [
     {"address": -1}, {"address": 65535, "data_type": "float32"}, {"scale": 0.0},
     {"scale": math.inf}, {"offset": math.nan}, {"nan_value": 0x10000, "data_type": "int16"},
-    {"table": "coil"}, {"data_type": "float64"}, {"word_order": "middle"},
+    {"table": "register"}, {"data_type": "float64"}, {"word_order": "middle"},
+    {"table": "coil", "nan_value": 0},  # a bit has no "no value" code
 ])
 def test_point_validation(kw: dict[str, object]) -> None:
     args: dict[str, object] = {"name": "bad", "address": 0}
@@ -233,3 +234,24 @@ def test_plan_writes_only_merges_exactly_contiguous_holding_points() -> None:
         plan_writes([pt(0)])
     with pytest.raises(ValueError, match="overlapping"):
         plan_writes([pt(0, table="holding"), pt(1, table="holding")])
+
+
+@pytest.mark.parametrize("table", ["coil", "discrete_input"])
+def test_a_bit_point_is_one_bit_whatever_its_data_type(table: str) -> None:
+    """Coils and discrete inputs (FC 1, 2) hold one bit: 0 or 1, any non-zero bit is 1;
+    a linear map inverts a normally closed contact (issue 36's occupied signal)."""
+    p = RegisterPoint(name="occupied", address=7, table=table)  # data_type float32 ignored
+    assert p.is_bit and p.count == 1 and p.end == 8
+    assert p.where() == f"{table.replace('_', ' ')} 7"
+    assert [decode(p, [b]) for b in (0, 1, True)] == [0.0, 1.0, 1.0]
+    assert encode(p, 1.0) == [1] and encode(p, 0.0) == [0]
+    with pytest.raises(ValueError, match="no bit"):
+        encode(p, 0.5)
+    nc = RegisterPoint(name="occupied", address=7, table=table, scale=-1.0, offset=1.0)
+    assert decode(nc, [0]) == 1.0 and decode(nc, [1]) == 0.0 and encode(nc, 1.0) == [0]
+    # bits of one table merge into one read, apart from the registers
+    blocks = plan_reads([p, RegisterPoint(name="b", address=8, table=table),
+                         RegisterPoint(name="r", address=7, table="holding",
+                                       data_type="uint16")])
+    assert [(b.table, b.address, b.count) for b in blocks] == [("holding", 7, 1),
+                                                               (table, 7, 2)]

@@ -1,5 +1,5 @@
-"""``dsfd override``, ``dsfd resume`` and ``dsfd mode``: operator commands to the running
-daemon of a panel.
+"""``dsfd override``, ``dsfd resume``, ``dsfd mode`` and ``dsfd occupancy``: operator commands
+to the running daemon of a panel.
 
 Examples::
 
@@ -7,6 +7,9 @@ Examples::
     sudo dsfd override --config /etc/dsfd/suwon-south.yaml            # hold where it is
     sudo dsfd resume --config /etc/dsfd/suwon-south.yaml
     sudo dsfd mode --config /etc/dsfd/suwon-south.yaml cooling        # the control objective
+    sudo dsfd occupancy --config /etc/dsfd/suwon-south.yaml occupied until 20:00
+    sudo dsfd occupancy --config /etc/dsfd/suwon-south.yaml unoccupied until 2026-12-01T08:00
+    sudo dsfd occupancy --config /etc/dsfd/suwon-south.yaml auto      # end the override
 
 The request is validated against the panel (louver grid and limits, the regimes the dampers
 allow, damper steps) before anything is queued; a bad one exits 2 naming the option and the
@@ -34,7 +37,7 @@ from dsfd.cli.state_dir import SYSTEMD_STATE_ROOT, state_dir_of
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_NOT_RUNNING, EXIT_NO_ACCESS = 0, 1, 2, 3, 4
 #: Option names of the request fields (for error messages).
 OPTION_OF = {"hold": "--hold", "louver_deg": "--louver-deg", "regime": "--regime",
-             "or_pct": "--or-pct", "mode": "OBJECTIVE"}
+             "or_pct": "--or-pct", "mode": "OBJECTIVE", "state": "STATE", "until": "until"}
 
 
 class OperatorError(Exception):
@@ -155,6 +158,20 @@ def register(sub: argparse._SubParsersAction) -> None:
     m.add_argument("objective", metavar="OBJECTIVE", help="heating, cooling or auto")
     _wait_options(m)
     m.set_defaults(handler=mode)
+    c = sub.add_parser(
+        "occupancy", help="override the occupancy: occupied|unoccupied until TIME, or auto",
+        description="Tell the running daemon that the room is occupied or unoccupied until a "
+        "time, whatever the occupied signal and the schedule say (the comfort limits apply "
+        "while occupied). TIME is HH:MM panel local time (the next such time) or an ISO 8601 "
+        "date-time (2026-12-01T08:00 is panel local time; add Z or +09:00 for a zone). 'auto' "
+        "ends the override. It moves nothing by itself and is no hold. Takes effect at the "
+        "next cycle.")
+    add_target(c)
+    c.add_argument("state", metavar="STATE", help="occupied, unoccupied or auto")
+    c.add_argument("until", nargs="*", metavar="until TIME",
+                   help="when the override ends: 'until 18:00', 'until 2026-12-01T08:00'")
+    _wait_options(c)
+    c.set_defaults(handler=occupancy)
 
 
 def _wait_options(p: argparse.ArgumentParser) -> None:
@@ -180,6 +197,17 @@ def resume(args: argparse.Namespace) -> int:
 
 def mode(args: argparse.Namespace) -> int:
     return _send("mode", {"command": "mode", "mode": args.objective}, args)
+
+
+def occupancy(args: argparse.Namespace) -> int:
+    from dsfd.daemon.commands import CommandError, occupancy_request
+
+    try:
+        request = occupancy_request(" ".join([args.state, *args.until]))
+    except CommandError as exc:
+        print(f"dsfd occupancy: {exc}; nothing was sent", file=sys.stderr)
+        return EXIT_USAGE
+    return _send("occupancy", request, args)
 
 
 def _send(name: str, request: dict[str, Any], args: argparse.Namespace) -> int:

@@ -96,6 +96,7 @@ def _gather(conn: sqlite3.Connection, state: Path, cfg: Any | None, now: float,
         "last_cycle": None if last is None else _cycle(last, now),
         "hold": None if last is None else _hold(conn, last, now),
         "objective": None if last is None else _objective(conn, last),
+        "occupancy": None if last is None else _occupancy(conn, last, now),
         "flagged": [] if last is None else _flagged(conn, last),
         "calibration": _calibration(conn, cfg, (run or {}).get("panel"), now),
         "commands": _commands(conn) if "commands" in tables else None,
@@ -175,6 +176,44 @@ def _objective(conn: sqlite3.Connection, d: dict[str, Any]) -> dict[str, Any] | 
         who = f" by {cmd['source']} {cmd['requester']}" if cmd else ""
         out["set_by"] = f"operator command #{out['command_id']}{who}"
     return out
+
+
+def _occupancy(conn: sqlite3.Connection, d: dict[str, Any], now: float
+               ) -> dict[str, Any] | None:
+    """The occupancy of the last cycle, where it came from, and an operator's override in
+    force (None before schema 6)."""
+    from dsfd.measured import iso_utc
+
+    if "comfort" not in _tables(conn):
+        return None
+    row = first_row(conn, "SELECT occupied, occupancy_source FROM comfort WHERE run_id = ? "
+                    "AND cycle = ?", d["run_id"], d["cycle"])
+    out: dict[str, Any] = {
+        "occupied": None if row is None else bool(row["occupied"]),
+        "source": None if row is None else row["occupancy_source"], "override": None}
+    state, until = d.get("occupancy_override"), d.get("occupancy_until_s")
+    if state is not None and until is not None:
+        o: dict[str, Any] = {"state": state, "until_utc": iso_utc(round(until)),
+                             "remaining_s": None, "command_id": d.get("occupancy_command_id"),
+                             "requester": None}
+        if _age(d["time_s"], now) is not None:
+            o["remaining_s"] = round(until - now, 1)
+        if o["command_id"] is not None and (cmd := _requester(conn, o["command_id"])):
+            o["requester"] = f"{cmd['source']} {cmd['requester']}"
+        out["override"] = o
+    return out
+
+
+def _occupancy_line(occ: dict[str, Any]) -> str:
+    now = "unknown" if occ["occupied"] is None else (
+        f"{'occupied' if occ['occupied'] else 'unoccupied'} (by the {occ['source']})")
+    o = occ["override"]
+    if o is None:
+        return f"{now}; no override"
+    by = f" by {o['requester']}" if o["requester"] else ""
+    left = "" if o["remaining_s"] is None else \
+        f", {_duration(max(o['remaining_s'], 0.0))} left"
+    return f"{now}; override {o['state']} until {o['until_utc']}{left}{by}"
 
 
 def _flagged(conn: sqlite3.Connection, d: dict[str, Any]) -> list[dict[str, str]]:
@@ -262,6 +301,8 @@ def render(info: dict[str, Any]) -> list[str]:
     if obj := info.get("objective"):
         now = f" ({obj['now']} now)" if obj["mode"] == "auto" and obj["now"] else ""
         out.append(f"  objective:   {obj['mode']}{now}; set by {obj['set_by']}")
+    if occ := info.get("occupancy"):
+        out.append(f"  occupancy:   {_occupancy_line(occ)}")
     flagged = ", ".join(f"{f['signal']} ({f['quality']})" for f in info["flagged"])
     out.append(f"  flagged:     {flagged or 'none'}")
     out.append(f"  calibration: {_calibration_line(info['calibration'])}")

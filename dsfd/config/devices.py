@@ -37,6 +37,7 @@ from typing import Literal
 
 from dsfd.config.loader import Problem, setting
 from dsfd.registers import (
+    BIT_TABLES,
     RegisterPoint,
     overlaps,
     plan_reads,
@@ -117,7 +118,9 @@ class _Register:
 class SensorPoint(_Register):
     signal: str = setting(doc="Measured signal (dsfd.signals), unit in the name",
                           choices=tuple(SENSORS))
-    table: Literal["input", "holding"] = setting("input", doc="Register table")
+    table: Literal["input", "holding", "coil", "discrete_input"] = setting(
+        "input", doc="Register table, or a bit (coil FC 1, discrete input FC 2) for a 0/1 "
+        "signal such as occupied; a bit ignores data_type and the orders")
     nan_value: int | None = setting(
         None, doc="Raw 'no value' code, e.g. 0x7FFF (bit pattern; negative = two's complement)")
 
@@ -125,7 +128,19 @@ class SensorPoint(_Register):
         if self.signal not in SENSORS:
             return [Problem("signal", self.signal,
                             f"not a sensor signal; known: {', '.join(SENSORS)}")]
+        if self.table in BIT_TABLES:
+            return self._bit_problems()
         return self._register_problems(self.nan_value)
+
+    def _bit_problems(self) -> list[Problem]:
+        binary = tuple(n for n, s in SENSORS.items() if s.integer and s.upper - s.lower == 1)
+        if self.signal not in binary:
+            return [Problem("table", self.table, f"a bit holds only a 0/1 signal "
+                            f"({', '.join(binary)}); {self.signal} needs a register")]
+        if self.nan_value is not None:
+            return [Problem("nan_value", self.nan_value, f"a {self.table} has no 'no value' "
+                            "code; remove it")]
+        return [Problem("scale", self.scale, "must not be zero")] if self.scale == 0.0 else []
 
     def point(self) -> RegisterPoint:
         return RegisterPoint(name=self.signal, address=self.address, table=self.table,
@@ -317,14 +332,15 @@ class DeviceConfig:
 
     def _override_input_problems(self) -> list[Problem]:
         oi = self.override_input
-        if oi is None or oi.table != "holding":
+        if oi is None:
             return []
+        what = f"holding register {oi.address}" if oi.table == "holding" else oi.where()
         for key, entries in (("sensors", self.sensors), ("actuators", self.actuators)):
             for i, entry in enumerate(entries):
                 p = entry.point()
-                if p.table == "holding" and p.address <= oi.address < p.end:
+                if p.table == oi.table and p.address <= oi.address < p.end:
                     return [Problem("override_input.address", oi.address,
-                                    f"holding register {oi.address} is already {key}[{i}] "
+                                    f"{what} is already {key}[{i}] "
                                     f"({p.address}..{p.end - 1})")]
         return []
 

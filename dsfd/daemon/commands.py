@@ -15,17 +15,26 @@ A request is a mapping of fields (JSON-ready, as stored in the ``commands`` tabl
 ``or_pct``     override only: damper opening on ``safety.or_step_pct`` steps, 0 in regime 10
 ``mode``       mode only (required): the control objective, ``heating``, ``cooling`` or
                ``auto`` (as ``control.mode``)
+``state``      occupancy only (required): ``occupied``, ``unoccupied`` or ``auto`` (end an
+               override: the occupied signal, else the schedule, decides again)
+``until``      occupancy only (required with occupied/unoccupied): when the override ends,
+               ``"HH:MM"`` panel local time (the next such time) or an ISO 8601 date-time
+               (``2026-12-01T08:00``: panel local time; with ``Z`` or ``+09:00``: that zone)
 =============  ==============================================================================
 
 Positions left out stay where the actuators are when the daemon applies the command; an
 override without positions holds the panel where it is. ``mode`` sets the objective the
 optimiser and the baseline pursue (docs/model.md#control-objective) in place of the panel
 file's ``control.mode``; it moves nothing by itself and is no hold (docs/operating.md,
-"Sharing the panel with people").
+"Sharing the panel with people"). ``occupancy`` overrides the occupancy the comfort limits
+follow until a time (docs/model.md#occupancy); it moves nothing by itself either. An
+``until`` is checked here for its form; its instant depends on the time the daemon applies
+it (:func:`resolve_until`, on the daemon's clock), where one already past is rejected.
 """
 
 from __future__ import annotations
 
+import datetime
 import math
 import re
 from collections.abc import Mapping
@@ -39,15 +48,21 @@ __all__ = [
     "MAX_HOLD_S",
     "MIN_HOLD_S",
     "OBJECTIVE_MODES",
+    "OCCUPANCY_STATES",
     "CommandError",
     "OperatorCommand",
+    "occupancy_request",
     "parse_duration",
+    "resolve_until",
     "validate_command",
 ]
 
-COMMAND_KINDS = ("override", "resume", "mode")
+COMMAND_KINDS = ("override", "resume", "mode", "occupancy")
 _FIELDS = {"override": ("hold", "louver_deg", "regime", "or_pct"), "resume": (),
-           "mode": ("mode",)}
+           "mode": ("mode",), "occupancy": ("state", "until")}
+#: What an ``occupancy`` command may say.
+OCCUPANCY_STATES = ("occupied", "unoccupied", "auto")
+_CLOCK = re.compile(r"^([01][0-9]|2[0-3]):([0-5][0-9])$")
 #: The control objectives an operator may choose (the values of ``control.mode``).
 OBJECTIVE_MODES = ("heating", "cooling", "auto")
 #: Shortest and longest hold an operator may ask for [s].
@@ -79,6 +94,9 @@ class OperatorCommand:
     afr: int | None = None
     or_pct: float | None = None
     mode: str | None = None
+    #: occupancy only: ``occupied``, ``unoccupied`` or ``auto``, and the ``until`` as given.
+    state: str | None = None
+    until: str | None = None
 
     def positions(self) -> dict[str, float]:
         """The positions given, by actuator name."""
@@ -90,6 +108,8 @@ class OperatorCommand:
             return "resume"
         if self.kind == "mode":
             return f"mode {self.mode}"
+        if self.kind == "occupancy":
+            return f"occupancy {self.state}" + (f" until {self.until}" if self.until else "")
         parts = [f"{k} {v:g}" for k, v in self.positions().items()] or ["positions kept"]
         hold = "default hold" if self.hold_s is None else f"hold {_minutes(self.hold_s)}"
         return f"override ({hold}; {', '.join(parts)})"
@@ -141,6 +161,8 @@ def validate_command(cfg: PanelConfig, request: Mapping[str, Any]) -> OperatorCo
         if not isinstance(mode, str) or mode not in OBJECTIVE_MODES:
             raise CommandError("mode", mode, f"expected one of {', '.join(OBJECTIVE_MODES)}")
         return OperatorCommand("mode", mode=mode)
+    if kind == "occupancy":
+        return _occupancy(request)
     hold_s = _hold(request["hold"]) if request.get("hold") is not None else None
     phi = _louver(cfg, request["louver_deg"]) if request.get("louver_deg") is not None \
         else None
@@ -150,6 +172,78 @@ def validate_command(cfg: PanelConfig, request: Mapping[str, Any]) -> OperatorCo
     if afr == CLOSED_REGIME and or_pct is None:
         or_pct = 0.0
     return OperatorCommand("override", hold_s=hold_s, phi_deg=phi, afr=afr, or_pct=or_pct)
+
+
+def occupancy_request(text: str) -> dict[str, Any]:
+    """The request of an occupancy command written out: ``"occupied until 18:00"``,
+    ``"unoccupied until 2026-12-01T08:00"``, ``"auto"`` (the CLI's words, MQTT's payload).
+    :class:`CommandError` if it is not of that form; the fields are checked by
+    :func:`validate_command`."""
+    words = text.split()
+    if not words:
+        raise CommandError("state", text, f"expected one of {', '.join(OCCUPANCY_STATES)}, "
+                           "e.g. 'occupied until 18:00'")
+    request: dict[str, Any] = {"command": "occupancy", "state": words[0]}
+    rest = words[1:]
+    if rest and (rest[0] != "until" or len(rest) != 2):
+        raise CommandError("until", " ".join(rest), "expected 'until TIME' after the state, "
+                           "e.g. 'occupied until 18:00'")
+    if rest:
+        request["until"] = rest[1]
+    return request
+
+
+def _occupancy(request: Mapping[str, Any]) -> OperatorCommand:
+    state, until = request.get("state"), request.get("until")
+    if not isinstance(state, str) or state not in OCCUPANCY_STATES:
+        raise CommandError("state", state, f"expected one of {', '.join(OCCUPANCY_STATES)}")
+    if state == "auto":
+        if until is not None:
+            raise CommandError("until", until, "auto ends the override: give no time")
+        return OperatorCommand("occupancy", state=state)
+    if until is None:
+        raise CommandError("until", until, f"{state} needs an end time, e.g. 18:00 or "
+                           "2026-12-01T08:00")
+    _parse_until(until)  # the form; the instant is the daemon's to resolve
+    return OperatorCommand("occupancy", state=state, until=str(until).strip())
+
+
+def _parse_until(value: Any) -> tuple[int, int] | datetime.datetime:
+    """``until`` as a local clock time (hours, minutes) or a date-time (naive: panel local
+    time); :class:`CommandError` for anything else."""
+    text = value.strip() if isinstance(value, str) else None
+    if text:
+        m = _CLOCK.match(text)
+        if m is not None:
+            return int(m.group(1)), int(m.group(2))
+        if len(text) > 10:  # a date alone is no end time
+            try:
+                return datetime.datetime.fromisoformat(text)
+            except ValueError:
+                pass
+    raise CommandError("until", value, "expected a local time HH:MM (e.g. 18:00) or an ISO "
+                       "8601 date-time (e.g. 2026-12-01T08:00, 2026-12-01T08:00+09:00)")
+
+
+def resolve_until(value: Any, *, now_s: float, utc_offset_h: float) -> float:
+    """The UTC instant [s] an occupancy command's ``until`` means at ``now_s``: ``HH:MM`` is
+    the next such panel local time after ``now_s``, a date-time without a zone is panel
+    local time. :class:`CommandError` if it is not after ``now_s`` or more than
+    :data:`MAX_HOLD_S` ahead."""
+    parsed = _parse_until(value)
+    local = datetime.timezone(datetime.timedelta(hours=utc_offset_h))
+    if isinstance(parsed, tuple):
+        now_local = datetime.datetime.fromtimestamp(now_s, local)
+        at = now_local.replace(hour=parsed[0], minute=parsed[1], second=0, microsecond=0)
+        if at.timestamp() <= now_s:
+            at += datetime.timedelta(days=1)
+        return at.timestamp()
+    at_s = (parsed if parsed.tzinfo is not None else parsed.replace(tzinfo=local)).timestamp()
+    if at_s <= now_s:
+        raise CommandError("until", value, "already past: give a time in the future")
+    if at_s - now_s > MAX_HOLD_S:
+        raise CommandError("until", value, f"more than {_minutes(MAX_HOLD_S)} ahead")
+    return at_s
 
 
 def _hold(value: Any) -> float:

@@ -44,7 +44,7 @@ from dsfd.config.panel import PanelConfig
 from dsfd.control.baseline import rule_decision
 from dsfd.control.comfort import ComfortCheck, comfort_check
 from dsfd.control.objective import is_heating
-from dsfd.control.occupancy import occupied
+from dsfd.control.occupancy import EffectiveOccupancy
 from dsfd.control.optimiser import ControlProblem, Decision, MpcOptimiser
 from dsfd.daemon.calibration import CalibrationStage, UpdateOutcome
 from dsfd.daemon.clock import Clock, Slot, WallClockWatch
@@ -130,6 +130,7 @@ class Controller:
 
         held = self._hold_update(slot, now_s, got)
         hold = held.hold
+        occupancy = self.manual.occupancy.resolve(self.cfg, checked, report.flags, now_s=now_s)
         # While held, the positions read back are what the panel got.
         current = got.read_back or self.io.expected or self.io.last_written
         mark = time.perf_counter()
@@ -172,7 +173,7 @@ class Controller:
         horizon_x = self._horizon_end(estimate, forecast, applied)
         t["predict"] = _ms(mark)
         mark = time.perf_counter()
-        comfort = self._comfort(estimate, forecast, safe.command, now_s)
+        comfort = self._comfort(estimate, forecast, safe.command, occupancy)
         t["comfort"] = _ms(mark)
 
         outcome = CycleOutcome(
@@ -186,7 +187,8 @@ class Controller:
             mode_command_id=objective_by,
             run_elapsed_s=round(slot.deadline_s - self._grid0_s, 6),
             events=[*events, *held.events, *_drain(self.calibration.events)],
-            command_results=held.results, comfort=comfort)
+            command_results=held.results, comfort=comfort, occupancy=occupancy,
+            occupancy_override=self.manual.occupancy.override)
         mark = time.perf_counter()
         outcome.store_ok = await self._store(outcome, weather)
         t["store"] = _ms(mark)
@@ -333,13 +335,13 @@ class Controller:
             return None
 
     def _comfort(self, estimate: StateEstimate, forecast: Forcing | None, command: Command,
-                 now_s: float) -> ComfortCheck | None:
+                 occupancy: EffectiveOccupancy) -> ComfortCheck | None:
         """The comfort limits ``command`` would break (docs/model.md#comfort), for the trace:
-        the pane and the supply air taken as the estimated x3 and cavity air x5 now."""
+        the pane and the supply air taken as the estimated x3 and cavity air x5 now, the
+        occupancy as resolved this cycle (override > signal > schedule)."""
         if forecast is None or not estimate.usable:
             return None
-        is_occupied = bool(occupied(now_s, occupancy=self.cfg.occupancy,
-                                    utc_offset_h=self.cfg.site.utc_offset_h))
+        is_occupied = occupancy.occupied
         try:
             return comfort_check(self.cfg, self.optics, forecast, phi_deg=command.phi_deg,
                                  afr=command.afr, or_pct=command.or_pct,

@@ -13,6 +13,9 @@ previous run left active (the last stored decision says so, and it has not expir
 position the actuators have then: a restart of the service neither undoes a person's hold
 nor moves the panel.
 
+``occupancy`` commands go to :class:`~dsfd.daemon.occupancy.OccupancyStage` (an override of
+the occupancy the comfort limits follow, until a time); they are no hold either.
+
 The stage also keeps the **control objective** an operator chose with a ``mode`` command
 (heating, cooling, auto) in place of the panel file's ``control.mode``. It is no hold: the
 controller goes on deciding, for that objective. It lasts until the next ``mode`` command or
@@ -31,6 +34,7 @@ from typing import Any
 from dsfd.config.panel import PanelConfig
 from dsfd.daemon.commands import OBJECTIVE_MODES, CommandError, OperatorCommand, validate_command
 from dsfd.daemon.hold import Hold, HoldTracker, HoldUpdate, PendingCommand
+from dsfd.daemon.occupancy import OccupancyStage
 from dsfd.drivers.base import Command
 from dsfd.storage import commands as command_table
 from dsfd.storage.timeseries import Store
@@ -55,6 +59,8 @@ class ManualStage:
         self.operator_mode: tuple[str, int] | None = None
         #: Events that happened between cycles (a reload), handed over with the next update.
         self._events: list[tuple[str, str, str]] = []
+        #: An operator's occupancy override and the occupied signal's state (issue 36).
+        self.occupancy = OccupancyStage()
 
     @property
     def hold(self) -> Hold | None:
@@ -116,19 +122,34 @@ class ManualStage:
                ) -> HoldUpdate:
         """This cycle's hold and objective, with the commands picked up now."""
         holds: list[PendingCommand] = []
-        modes: list[PendingCommand] = []
+        others: list[PendingCommand] = []  # mode and occupancy: no hold
         for pending in self._claim():
-            is_mode = isinstance(pending.command, OperatorCommand) and \
-                pending.command.kind == "mode"
-            (modes if is_mode else holds).append(pending)
+            kind = pending.command.kind if isinstance(pending.command, OperatorCommand) \
+                else None
+            (others if kind in ("mode", "occupancy") else holds).append(pending)
         up = self.tracker.update(now_mono_s=now_mono_s, now_s=now_s, read_back=read_back,
                                  expected=expected, input_active=input_active,
                                  input_where=input_where, commands=holds)
-        up.events[:0] = self._events
+        up.events[:0] = [*self._events, *self.occupancy.expire(now_s)]
         self._events = []
-        for pending in modes:
-            self._set_mode(up, pending)
+        for pending in others:
+            if isinstance(pending.command, OperatorCommand) and \
+                    pending.command.kind == "occupancy":
+                self._set_occupancy(up, pending, now_s)
+            else:
+                self._set_mode(up, pending)
         return up
+
+    def _set_occupancy(self, up: HoldUpdate, pending: PendingCommand, now_s: float) -> None:
+        """An ``occupancy`` command (an input hold does not refuse it: it moves nothing)."""
+        assert isinstance(pending.command, OperatorCommand)
+        result, event = self.occupancy.command(
+            pending.command, pending.command_id, now_s=now_s,
+            utc_offset_h=self.cfg.site.utc_offset_h,
+            who=f"{pending.source} {pending.requester}")
+        up.results.append(result)
+        if event is not None:
+            up.events.append(event)
 
     def _set_mode(self, up: HoldUpdate, pending: PendingCommand) -> None:
         """A ``mode`` command: the objective from this cycle on (an input hold does not

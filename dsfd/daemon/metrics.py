@@ -24,7 +24,22 @@ dsfd_airflow_regime                    gauge    1..10
 dsfd_damper_opening_ratio              gauge    0..1
 dsfd_hold_active                       gauge    1 while a manual hold decides (method manual)
 dsfd_room_heat_watts{term}             gauge    the model's room-side heat of the last step
+dsfd_occupied{source}                  gauge    1 while the room counts as occupied; source:
+                                                override, signal or schedule (issue 36)
+dsfd_occupancy_override_active         gauge    1 while an operator's occupancy override holds
+dsfd_direct_sun_watts_per_square_meter gauge    unscattered beam into the room, last cycle
+dsfd_daylight_glare_probability        gauge    simplified DGPs at the occupant's eye
+dsfd_supply_air_celsius                gauge    air blown into the room (NaN: none)
+dsfd_radiant_asymmetry_kelvin          gauge    the inner pane's radiant asymmetry, + warm
+dsfd_occupied_seconds_total            counter  occupied time (one cycle period per cycle)
+dsfd_comfort_exceeded_seconds_total    counter  occupied time beyond a comfort limit; limit:
+{limit}                                         direct_sun, glare, draught, asymmetry
 =====================================  =======  ==============================================
+
+The comfort series follow the day figures of the MQTT ``kpi`` topic
+(:func:`dsfd.report.comfort_kpis.comfort_kpis`, each cycle counted as one cycle period):
+Prometheus gets the running totals, ``increase(...[1d])`` the day's minutes. The gauges
+are NaN while the comfort quantities cannot be computed (no forecast, no state estimate).
 
 With an ``mqtt:`` section, the broker's state as the publisher last saw it:
 
@@ -50,11 +65,12 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from dsfd.storage.schema import HEAT_TERMS
 
 if TYPE_CHECKING:
+    from dsfd.config.comfort import Comfort
     from dsfd.daemon.calibration import CalibrationStage
     from dsfd.daemon.loop import CycleOutcome
 
@@ -123,6 +139,7 @@ class MetricsFile:
                           [*p, "term"])
         for term in HEAT_TERMS:
             self.heat.labels(panel, term).set(math.nan)
+        self._comfort = _ComfortMetrics(r, panel)
         self.calibration_age.labels(panel).set(math.nan)
         self.write_failures.labels(panel)
         self.updates.labels(panel)
@@ -155,6 +172,8 @@ class MetricsFile:
         pred = out.estimate.prediction if out.estimate is not None else None
         for term in HEAT_TERMS:
             self.heat.labels(panel, term).set(math.nan if pred is None else pred.heat_w[term])
+        cfg = calibration.cfg
+        self._comfort.update(out, cfg.comfort, period_s=cfg.daemon.cycle_period_s)
 
     def update_mqtt(self, health: Mapping[str, Any]) -> None:
         """Take the MQTT publisher's state (``MqttPublisher.health``)."""
@@ -167,6 +186,67 @@ class MetricsFile:
         from prometheus_client import write_to_textfile
 
         write_to_textfile(self.path, self.registry)
+
+
+class _ComfortMetrics:
+    """The occupancy and the comfort quantities of the last cycle, and their running totals
+    (issue 36)."""
+
+    #: Counter label of each day figure of :func:`~dsfd.report.comfort_kpis.comfort_kpis`
+    #: (glare: from the share above the limit).
+    LIMITS: ClassVar[dict[str, str | None]] = {
+        "direct_sun": "occupied_direct_sun_min", "glare": None,
+        "draught": "supply_air_below_limit_min", "asymmetry": "asymmetry_beyond_limit_min"}
+
+    def __init__(self, registry: Any, panel: str) -> None:
+        from prometheus_client import Counter, Gauge
+
+        p, r = ["panel"], registry
+        self.panel = panel
+        self.occupied = Gauge("dsfd_occupied", "1 while the room counts as occupied; source: "
+                              "override, signal or schedule", [*p, "source"], registry=r)
+        self.override = Gauge("dsfd_occupancy_override_active", "1 while an operator's "
+                              "occupancy override holds", p, registry=r)
+        self.quantities = {
+            "direct_sun_wm2": Gauge("dsfd_direct_sun_watts_per_square_meter", "Solar beam "
+                                    "passing the louver unscattered into the room", p,
+                                    registry=r),
+            "dgp": Gauge("dsfd_daylight_glare_probability", "Simplified daylight glare "
+                         "probability DGPs at the occupant's eye", p, registry=r),
+            "supply_air_c": Gauge("dsfd_supply_air_celsius", "Air blown into the room "
+                                  "(NaN: none)", p, registry=r),
+            "asymmetry_k": Gauge("dsfd_radiant_asymmetry_kelvin", "Radiant asymmetry of the "
+                                 "inner pane, + warm", p, registry=r)}
+        self.occupied_s = Counter("dsfd_occupied_seconds", "Occupied time", p, registry=r)
+        self.exceeded_s = Counter("dsfd_comfort_exceeded_seconds", "Occupied time beyond a "
+                                  "comfort limit", [*p, "limit"], registry=r)
+        self.override.labels(panel).set(0.0)
+        self.occupied_s.labels(panel)
+        for limit in self.LIMITS:
+            self.exceeded_s.labels(panel, limit)
+        for gauge in self.quantities.values():
+            gauge.labels(panel).set(math.nan)
+
+    def update(self, out: CycleOutcome, limits: Comfort, *, period_s: float) -> None:
+        from dsfd.daemon.record import comfort_row
+        from dsfd.report.comfort_kpis import comfort_kpis
+
+        panel = self.panel
+        row = comfort_row(out, limits)
+        self.override.labels(panel).set(0.0 if out.occupancy_override is None else 1.0)
+        if row is None:
+            return
+        self.occupied.clear()  # one series: the source of now
+        self.occupied.labels(panel, row["occupancy_source"]).set(float(row["occupied"]))
+        for key, gauge in self.quantities.items():
+            value = row.get(key)
+            gauge.labels(panel).set(math.nan if value is None else float(value))
+        day = comfort_kpis([row], step_s=period_s)
+        self.occupied_s.labels(panel).inc(day["occupied_min"] * 60.0)
+        glare = (day["dgp_above_limit_pct"] or 0.0) / 100.0 * day["occupied_min"]
+        for limit, key in self.LIMITS.items():
+            minutes = glare if key is None else day[key]
+            self.exceeded_s.labels(panel, limit).inc(minutes * 60.0)
 
 
 class _MqttMetrics:

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from dsfd.control.comfort import ComfortCheck
+from dsfd.control.occupancy import EffectiveOccupancy, OccupancyOverride
 from dsfd.control.optimiser import Decision
 from dsfd.daemon.calibration import UpdateOutcome
 from dsfd.daemon.hold import Hold
@@ -67,6 +68,10 @@ class CycleOutcome:
     #: The comfort limits the command would break (docs/model.md#comfort); informative
     #: only, the decision ignores them. None without a forecast or a usable estimate.
     comfort: ComfortCheck | None = None
+    #: The occupancy in force this cycle and where it came from (issue 36), and the
+    #: operator's occupancy override in force (None: none).
+    occupancy: EffectiveOccupancy | None = None
+    occupancy_override: OccupancyOverride | None = None
 
     @property
     def cycle_ms(self) -> float:

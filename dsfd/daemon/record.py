@@ -6,15 +6,18 @@ import math
 from typing import TYPE_CHECKING, Any
 
 from dsfd.measured import iso_utc
+from dsfd.physics.comfort_thermal import asymmetry_limit_k, supply_air_min_c
 from dsfd.physics.constants import T_ZERO
 from dsfd.storage.timeseries import CycleRecord
 
 if TYPE_CHECKING:
+    from dsfd.config.comfort import Comfort
+    from dsfd.control.occupancy import OccupancyOverride
     from dsfd.daemon.calibration import CalibrationStage
     from dsfd.daemon.outcome import CycleOutcome
     from dsfd.daemon.weather import CycleWeather
 
-__all__ = ["cycle_record"]
+__all__ = ["comfort_row", "cycle_record"]
 
 
 def cycle_record(out: CycleOutcome, weather: CycleWeather, calibration: CalibrationStage
@@ -30,6 +33,10 @@ def cycle_record(out: CycleOutcome, weather: CycleWeather, calibration: Calibrat
         trace = [{"stage": f"decide:{proposed.method}", "set": {
             "phi_deg": proposed.phi_deg, "afr": proposed.afr, "or_pct": proposed.or_pct},
             "why": " | ".join(proposed.trace)}, *trace]
+    if out.occupancy is not None:
+        trace.append({"stage": "occupancy", "set": {"occupied": out.occupancy.occupied,
+                                                    "source": out.occupancy.source},
+                      "why": out.occupancy.why})
     if out.comfort is not None:  # informative: the decision did not weigh it
         trace.append({"stage": "comfort", "set": {}, "why": out.comfort.describe()})
     if weather.notes:
@@ -53,6 +60,7 @@ def cycle_record(out: CycleOutcome, weather: CycleWeather, calibration: Calibrat
         "hold_expires_s": None if out.hold is None else out.hold.expires_s,
         "hold_command_id": None if out.hold is None else out.hold.command_id,
         "objective_mode": out.objective_mode, "mode_command_id": out.mode_command_id,
+        **_override_columns(out.occupancy_override),
     }
     params = None
     cal = out.calibration
@@ -69,7 +77,35 @@ def cycle_record(out: CycleOutcome, weather: CycleWeather, calibration: Calibrat
         events.append(("info", "sensor_recovered", name))
     return CycleRecord(cycle=out.cycle, time_s=out.time_s, samples=samples, decision=decision,
                        parameters=params, events=events, model=model_row(out),
-                       command_results=out.command_results)
+                       command_results=out.command_results,
+                       comfort=comfort_row(out, calibration.cfg.comfort))
+
+
+def _override_columns(o: OccupancyOverride | None) -> dict[str, Any]:
+    return {"occupancy_override": None if o is None else
+            ("occupied" if o.occupied else "unoccupied"),
+            "occupancy_until_s": None if o is None else o.until_s,
+            "occupancy_command_id": None if o is None else o.command_id}
+
+
+def comfort_row(out: CycleOutcome, limits: Comfort) -> dict[str, Any] | None:
+    """The ``comfort`` table's row of one cycle (schema 6): the occupancy, the comfort
+    quantities of the command with the limits in force (the asymmetry's for the side the
+    pane is on), and the broken limits; None if the occupancy is unknown."""
+    occ = out.occupancy
+    if occ is None:
+        return None
+    row: dict[str, Any] = {"occupied": occ.occupied, "occupancy_source": occ.source}
+    c = out.comfort
+    if c is not None:
+        row.update(
+            direct_sun_wm2=_finite(c.direct_sun_wm2), dgp=_finite(c.dgp),
+            supply_air_c=None if c.supply_air_c is None else _finite(c.supply_air_c),
+            asymmetry_k=_finite(c.asymmetry_k), direct_sun_max_wm2=limits.direct_sun_max_wm2,
+            dgp_max=limits.dgp_max, supply_air_min_c=supply_air_min_c(limits),
+            asymmetry_max_k=asymmetry_limit_k(limits.category, warm=c.asymmetry_k > 0.0),
+            violations=list(c.violations))
+    return row
 
 
 def model_row(out: CycleOutcome) -> dict[str, Any]:

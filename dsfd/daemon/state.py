@@ -4,8 +4,9 @@
 and records the run, then the calibration state (``calibration.json``, else the database's
 parameter history, else the priors: :class:`~dsfd.daemon.calibration.CalibrationStage`).
 :func:`restore_operator_state` takes over what the previous run's last stored decision
-says: a manual hold that has not expired, and the control objective an operator chose
-(:class:`~dsfd.daemon.manual.ManualStage`), each logged and recorded as an event.
+says: a manual hold that has not expired, an occupancy override that has not ended, and the
+control objective an operator chose (:class:`~dsfd.daemon.manual.ManualStage`), each logged
+and recorded as an event.
 """
 
 from __future__ import annotations
@@ -66,6 +67,12 @@ def restore_operator_state(manual: ManualStage, store: Store, clock: Clock) -> N
         log.warning("manual hold of the previous run restored: %s", restored)
         store.event(cycle=0, time_s=clock.wall(), level="info", kind="hold_restored",
                     message=restored)
+    occupancy = manual.occupancy.restore(last, now_s=clock.wall())
+    if occupancy:
+        log.warning("operator's occupancy override of the previous run restored: %s",
+                    occupancy)
+        store.event(cycle=0, time_s=clock.wall(), level="info", kind="occupancy_restored",
+                    message=occupancy)
     objective = manual.restore_mode(last, file_mode_then=_control_mode_of(store, last))
     if objective:
         log.warning("operator's choice of the previous run restored: %s", objective)

@@ -41,6 +41,7 @@ from dsfd.drivers.base import Command, Quality, Reading, Sample, WriteResult, co
 from dsfd.drivers.modbus_link import ModbusLink, configure_pymodbus_logging
 from dsfd.drivers.resilience import CircuitBreaker
 from dsfd.registers import (
+    BIT_TABLES,
     RegisterBlock,
     RegisterPoint,
     decode,
@@ -56,6 +57,9 @@ if TYPE_CHECKING:
 __all__ = ["ModbusDriver", "ModbusLink", "configure_pymodbus_logging"]
 
 log = logging.getLogger(__name__)
+#: The pymodbus client call that reads each table (FC 4, 3, 1, 2).
+_READ_CALL = {"input": "read_input_registers", "holding": "read_holding_registers",
+              "coil": "read_coils", "discrete_input": "read_discrete_inputs"}
 
 
 class ModbusDriver:
@@ -184,14 +188,14 @@ class ModbusDriver:
                 failed(b, Quality.DISCONNECTED, reason)
             return "disconnected"
         for i, block in enumerate(blocks):
-            fn = (self.link.client.read_input_registers if block.table == "input"
-                  else self.link.client.read_holding_registers)
+            fn = getattr(self.link.client, _READ_CALL[block.table])
             pdu, quality, why = await self._request(
                 partial(fn, block.address, count=block.count, device_id=self.device_id))
-            regs = list(getattr(pdu, "registers", []) or [])
+            regs = _values(pdu, block)
             if pdu is not None and len(regs) != block.count:
                 pdu, quality, why = None, Quality.DEVICE_ERROR, (
-                    f"short response, {len(regs)} of {block.count} registers")
+                    f"short response, {len(regs)} of {block.count} "
+                    + ("bits" if block.table in BIT_TABLES else "registers"))
             if pdu is not None:
                 got(block, regs)
                 continue
@@ -374,6 +378,14 @@ class ModbusDriver:
         if not values:
             return None
         return bool(values[0]) != oi.invert
+
+
+def _values(pdu: Any, block: RegisterBlock) -> list[int]:
+    """The block's registers, or its bits as 0/1 (a bit response is padded to whole bytes,
+    so only the first ``count`` bits are the block's)."""
+    if block.table not in BIT_TABLES:
+        return list(getattr(pdu, "registers", []) or [])
+    return [int(bool(b)) for b in list(getattr(pdu, "bits", []) or [])[:block.count]]
 
 
 def _exception_name(code: int | None) -> str:

@@ -1,7 +1,7 @@
 """The ``commands`` table: how operator requests reach the running daemon, durably and audited.
 
-One path for every source. A front end (``dsfd override``/``resume``/``mode``, the MQTT
-receiver, :mod:`dsfd.integrations.mqtt.receiver`, and the BACnet device,
+One path for every source. A front end (``dsfd override``/``resume``/``mode``/``occupancy``,
+the MQTT receiver, :mod:`dsfd.integrations.mqtt.receiver`, and the BACnet device,
 :mod:`dsfd.integrations.bacnet.device`) validates the request with
 :func:`dsfd.daemon.commands.validate_command` and, if it is well-formed, inserts a
 ``pending`` row with :func:`submit` naming its ``source`` and ``requester``. Every cycle the

@@ -21,6 +21,7 @@ from dsfd.storage.atomic import corrupt_name
 
 __all__ = [
     "BUSY_TIMEOUT_MS",
+    "COMFORT_COLUMNS",
     "DB_NAME",
     "HEAT_TERMS",
     "MIGRATIONS",
@@ -36,7 +37,7 @@ __all__ = [
 ]
 
 DB_NAME = "timeseries.sqlite"
-SCHEMA_VERSION = 5
+SCHEMA_VERSION = 6
 #: How long a connection waits for another one's lock before a statement fails [ms].
 BUSY_TIMEOUT_MS = 5000
 
@@ -85,6 +86,13 @@ MIGRATIONS: dict[int, str] = {
         ALTER TABLE decisions ADD COLUMN objective_mode TEXT;
         ALTER TABLE decisions ADD COLUMN mode_command_id INTEGER
     """,
+    # People behind the glass (issue 36): the operator's occupancy override in force; the
+    # comfort quantities of every cycle are the new table ``comfort``, from SCHEMA.
+    6: """
+        ALTER TABLE decisions ADD COLUMN occupancy_override TEXT;
+        ALTER TABLE decisions ADD COLUMN occupancy_until_s REAL;
+        ALTER TABLE decisions ADD COLUMN occupancy_command_id INTEGER
+    """,
 }
 
 _STATES = ("x1", "x2", "x3", "x4", "x5")
@@ -106,6 +114,19 @@ MODEL_COLUMNS: tuple[tuple[str, str], ...] = (
     *((f"plant_{q}_j", "REAL") for q in HEAT_TERMS),
 )
 _MODEL_DDL = ",\n    ".join(f"{name} {kind}" for name, kind in MODEL_COLUMNS)
+#: Columns of the ``comfort`` table after ``run_id, cycle, time_s`` (schema 6, one row per
+#: cycle; docs/storage-schema.md): the occupancy in force and where it came from, the comfort
+#: quantities of the command (NULL when they could not be computed) and the limits in force
+#: with them, and the limits broken while occupied.
+COMFORT_COLUMNS: tuple[tuple[str, str], ...] = (
+    ("occupied", "INTEGER NOT NULL"), ("occupancy_source", "TEXT NOT NULL"),
+    ("direct_sun_wm2", "REAL"), ("dgp", "REAL"), ("supply_air_c", "REAL"),
+    ("asymmetry_k", "REAL"),
+    ("direct_sun_max_wm2", "REAL"), ("dgp_max", "REAL"), ("supply_air_min_c", "REAL"),
+    ("asymmetry_max_k", "REAL"),
+    ("violations", "TEXT NOT NULL DEFAULT '[]'"),
+)
+_COMFORT_DDL = ",\n    ".join(f"{name} {kind}" for name, kind in COMFORT_COLUMNS)
 
 _PARAM_COLUMNS = ", ".join(f"{name} REAL" for name in PARAMETER_NAMES)
 SCHEMA = f"""
@@ -165,6 +186,9 @@ CREATE TABLE IF NOT EXISTS decisions (
     run_elapsed_s REAL,
     objective_mode TEXT,
     mode_command_id INTEGER,
+    occupancy_override TEXT,
+    occupancy_until_s REAL,
+    occupancy_command_id INTEGER,
     PRIMARY KEY (run_id, cycle)
 );
 CREATE INDEX IF NOT EXISTS decisions_by_time ON decisions (time_s);
@@ -195,6 +219,14 @@ CREATE TABLE IF NOT EXISTS model (
     {_MODEL_DDL},
     PRIMARY KEY (run_id, cycle)
 );
+CREATE TABLE IF NOT EXISTS comfort (
+    run_id INTEGER NOT NULL REFERENCES runs(run_id),
+    cycle INTEGER NOT NULL,
+    time_s REAL NOT NULL,
+    {_COMFORT_DDL},
+    PRIMARY KEY (run_id, cycle)
+);
+CREATE INDEX IF NOT EXISTS comfort_by_time ON comfort (time_s);
 CREATE TABLE IF NOT EXISTS commands (
     command_id INTEGER PRIMARY KEY AUTOINCREMENT,
     requested_s REAL NOT NULL,

@@ -34,6 +34,7 @@ from dsfd.config.panel import PARAMETER_NAMES
 from dsfd.storage.buffer import WriteBuffer
 from dsfd.storage.schema import (
     BUSY_TIMEOUT_MS,
+    COMFORT_COLUMNS,
     DB_NAME,
     HEAT_TERMS,
     MIGRATIONS,
@@ -49,6 +50,7 @@ from dsfd.storage.schema import (
 
 __all__ = [
     "BUSY_TIMEOUT_MS",
+    "COMFORT_COLUMNS",
     "DB_NAME",
     "HEAT_TERMS",
     "MIGRATIONS",
@@ -81,7 +83,8 @@ class CycleRecord:
     go into the JSON column ``other``); ``events``: (level, kind, message); ``model``: column
     → value of the ``model`` table (:data:`MODEL_COLUMNS`; absent ones are NULL);
     ``command_results``: (command_id, status, reason) of the operator commands this cycle
-    handled (``applied`` or ``rejected``).
+    handled (``applied`` or ``rejected``); ``comfort``: column → value of the ``comfort``
+    table (:data:`COMFORT_COLUMNS`, schema 6).
     """
 
     cycle: int
@@ -92,6 +95,7 @@ class CycleRecord:
     events: Sequence[tuple[str, str, str]] = field(default_factory=tuple)
     model: Mapping[str, float | int | None] | None = None
     command_results: Sequence[tuple[int, str, str]] = field(default_factory=tuple)
+    comfort: Mapping[str, Any] | None = None
 
 
 #: An event recorded outside its own cycle: (cycle, time_s, level, kind, message).
@@ -187,12 +191,9 @@ class Store:
                      *(_num(theta.get(n)) for n in PARAMETER_NAMES), _sql(other), _num(cost),
                      detail))
             if rec.model is not None:
-                cols = ["run_id", "cycle", "time_s",
-                        *(c for c, _ in MODEL_COLUMNS if c in rec.model)]
-                self.conn.execute(
-                    f"INSERT INTO model ({', '.join(cols)}) "
-                    f"VALUES ({', '.join('?' for _ in cols)})",
-                    (run, rec.cycle, rec.time_s, *(_sql(rec.model[c]) for c in cols[3:])))
+                self._row("model", run, rec, rec.model, MODEL_COLUMNS)
+            if rec.comfort is not None:
+                self._row("comfort", run, rec, rec.comfort, COMFORT_COLUMNS)
             self._events(run, rec.cycle, rec.time_s, rec.events)
             for cycle, time_s, level, kind, message in late_events:
                 self._events(run, cycle, time_s, [(level, kind, message)])
@@ -201,6 +202,14 @@ class Store:
                 "handled_utc = ? WHERE command_id = ? AND status = 'pending'",
                 [(status, reason, run, rec.cycle, iso_now(), command_id)
                  for command_id, status, reason in rec.command_results])
+
+    def _row(self, table: str, run: int, rec: CycleRecord, values: Mapping[str, Any],
+             known: Sequence[tuple[str, str]]) -> None:
+        """One row of a per-cycle table: the given columns of ``known``, the rest NULL."""
+        cols = ["run_id", "cycle", "time_s", *(c for c, _ in known if c in values)]
+        self.conn.execute(f"INSERT INTO {table} ({', '.join(cols)}) "
+                          f"VALUES ({', '.join('?' for _ in cols)})",
+                          (run, rec.cycle, rec.time_s, *(_sql(values[c]) for c in cols[3:])))
 
     def event(self, *, cycle: int, time_s: float, level: str, kind: str, message: str) -> None:
         """Record one event outside a cycle (start-up, reload, stop); if the database cannot

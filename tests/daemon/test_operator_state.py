@@ -224,6 +224,36 @@ def test_a_hold_survives_a_restart(tmp_path: Path) -> None:
                for r in daemon.records)
 
 
+def test_an_occupancy_override_survives_a_restart(tmp_path: Path) -> None:
+    """Issue 36: queued as the CLI queues it, applied in the first run, taken over by the
+    second until its time (10:00 local; both runs simulate 08:30-08:33 local)."""
+    panel = write_panel(tmp_path / "panel.yaml", devices=False,
+                        extra={"occupancy": {"sun": ["08:00-18:00"]}})
+    state = tmp_path / "state"
+    db = state / "timeseries.sqlite"
+
+    async def run(cycles: int) -> DaemonProcess:
+        daemon = await DaemonProcess(sim_args(panel, state, cycles)).start()
+        assert await daemon.wait_exit() == 0, daemon.stderr
+        return daemon
+
+    Store.open(state).close()
+    cid = submit(db, kind="occupancy", args={"state": "unoccupied", "until": "10:00"},
+                 source="cli", requester="test@host")
+    asyncio.run(run(3))
+    daemon = asyncio.run(run(3))
+    rows = query(db, "SELECT d.run_id, d.cycle, d.occupancy_override, d.occupancy_until_s, "
+                 "d.occupancy_command_id, c.occupied, c.occupancy_source FROM decisions d "
+                 "JOIN comfort c USING (run_id, cycle) ORDER BY run_id, cycle")
+    ten_local_s = parse_iso_utc("2022-01-02T01:00:00Z")  # 10:00 at UTC+9
+    assert [r[:2] for r in rows] == [(1, 1), (1, 2), (1, 3), (2, 1), (2, 2), (2, 3)]
+    assert {r[2:] for r in rows} == {("unoccupied", ten_local_s, cid, 0, "override")}
+    (message,), = query(db, "SELECT message FROM events WHERE kind = 'occupancy_restored'")
+    assert "unoccupied until 2022-01-02T01:00:00Z" in message
+    assert any("occupancy override of the previous run restored" in r.get("event", "")
+               for r in daemon.records)
+
+
 def test_a_late_optimiser_hands_over_to_the_baseline(tmp_path: Path) -> None:
     panel = write_panel(tmp_path / "panel.yaml", devices=False,
                         extra={"control": {"time_budget_s": 0.0001}})

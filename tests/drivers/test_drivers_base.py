@@ -25,13 +25,17 @@ from dsfd.signals import ACTUATOR_NAMES, SENSOR_NAMES, SIGNALS, signal
 def test_signal_catalogue() -> None:
     assert set(SENSOR_NAMES) == {"x1_c", "x2_c", "x3_c", "x4_c", "x5_c", "t_room_c", "t_out_c",
                                  "ghi_wm2", "wind_speed_ms", "wind_dir_deg", "v_cav_ms",
-                                 "rh_pct", "pressure_hpa"}
+                                 "rh_pct", "pressure_hpa", "occupied"}
     assert ACTUATOR_NAMES == ("phi_deg", "afr", "or_pct")
     assert (signal("phi_deg").lower, signal("phi_deg").upper) == (-90.0, 90.0)
     assert signal("afr").integer and (signal("afr").lower, signal("afr").upper) == (1, 10)
     assert signal("v_cav_ms").lower == 0.0  # unsigned anemometer
     assert all(s.lower < s.upper for s in SIGNALS.values())
     assert not signal("rh_pct").plausible(math.nan)
+    # a 0/1 signal: a register reading 0.5 or 2 is a mis-mapping, not a state
+    occupied = signal("occupied")
+    assert occupied.plausible(0.0) and occupied.plausible(1.0)
+    assert not occupied.plausible(0.5) and not occupied.plausible(2.0)
     with pytest.raises(KeyError, match="known"):
         signal("t_out_f")
 

@@ -146,6 +146,16 @@ def test_panels_without_devices_still_load() -> None:
     (lambda d: d["entries"][0].update(retries=4), "devices.write_budget_s",
      "exceeds the budget"),
     (lambda d: d.update(entries=[]), "devices.entries", "at least one"),
+    # issue 36: a coil or discrete input holds only a 0/1 signal (occupied)
+    (lambda d: d["entries"][0]["sensors"][1].update(table="coil"),
+     "devices.entries[0].sensors[1].table", "only a 0/1 signal (occupied)"),
+    (lambda d: d["entries"][0]["sensors"].append({"signal": "occupied", "address": 3,
+                                                  "table": "discrete_input",
+                                                  "nan_value": 0}),
+     "devices.entries[0].sensors[6].nan_value", "no 'no value' code"),
+    (lambda d: d["entries"][0].update(override_input={"table": "coil", "address": 4}) or
+     d["entries"][0]["sensors"].append({"signal": "occupied", "address": 4, "table": "coil"}),
+     "devices.entries[0].override_input.address", "coil 4 is already sensors[6]"),
 ])
 def test_errors_name_the_key_path(edit: Any, path: str, message: str) -> None:
     data = devices_data()

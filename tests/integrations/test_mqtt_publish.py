@@ -62,7 +62,9 @@ def render(template: str, state: dict[str, Any]) -> str:
 
 def test_discovery_configs_and_states_arrive_as_home_assistant_expects(
         broker: LocalBroker, tmp_path: Path) -> None:
-    panel = mqtt_panel(tmp_path / "panel.yaml", broker)
+    # Occupied until local midnight (Saturday, issue 36): the comfort KPIs count something.
+    panel = mqtt_panel(tmp_path / "panel.yaml", broker,
+                       extra={"occupancy": {"sat": ["20:00-24:00"]}})
     state_dir = tmp_path / "state"
     sub = Subscriber(broker, "homeassistant/#", "dsfd/#", out=tmp_path / "sub.txt").start()
     done = subprocess.run(dsfd_command(*run_args(panel, state_dir, start=START, cycles=CYCLES,
@@ -92,10 +94,20 @@ def test_discovery_configs_and_states_arrive_as_home_assistant_expects(
                for s in states)
     assert all(isinstance(s["heat_w"]["q_cv_rd"], float) for s in states[1:])  # after cycle 1
 
-    configs = {m.topic: m.json() for m in got if m.topic.startswith("homeassistant/")}
-    check_discovery(configs, states, got)
+    # The occupancy and the comfort quantities of each cycle are its comfort row.
+    comfort = {r[0]: r[1:] for r in query(db, "SELECT cycle, occupied, occupancy_source, dgp "
+                                              "FROM comfort")}
+    for s in states:
+        occupied, source, dgp = comfort[s["cycle"]]
+        assert (s["occupancy"]["occupied"], s["occupancy"]["source"]) == (bool(occupied),
+                                                                          source)
+        assert s["comfort"]["dgp"] == dgp and s["occupancy"]["override"] is None
 
     (kpi,) = [m.json() for m in got if m.topic == f"{BASE}/kpi"]
+    configs = {m.topic: m.json() for m in got if m.topic.startswith("homeassistant/")}
+    check_discovery(configs, states, got, kpi)
+    check_comfort_kpis(kpi, db)
+
     day_cycles = query(db, "SELECT COUNT(*) FROM decisions WHERE time_s < ?",
                        1641049200.0)[0][0]  # 2022-01-02 00:00 local (UTC+9)
     assert kpi["day"] == "2022-01-01" and kpi["cycles"] == day_cycles == 5
@@ -119,8 +131,30 @@ def test_discovery_configs_and_states_arrive_as_home_assistant_expects(
     assert set(configs) <= retained
 
 
+def check_comfort_kpis(kpi: dict[str, Any], db: Path) -> None:
+    """The day's comfort figures against the stored rows, counted here in SQL: the five
+    cycles of 2022-01-01 fall in the Saturday 20:00-24:00 schedule, each a 60 s step."""
+    day_end = 1641049200.0  # 2022-01-02 00:00 local (UTC+9)
+    (occupied, source), = query(db, "SELECT SUM(occupied), GROUP_CONCAT(DISTINCT "
+                                    "occupancy_source) FROM comfort WHERE time_s < ?", day_end)
+    assert (occupied, source) == (5, "schedule")
+    c = kpi["comfort"]
+    assert c["occupied_min"] == 5.0
+    # at night no sun reaches the room, and the glare probability is its floor 0.184
+    assert c["occupied_direct_sun_min"] == 0.0
+    assert c["dgp_p95"] == pytest.approx(0.184, abs=1e-3) and c["dgp_above_limit_pct"] == 0.0
+    (cold,), = query(db, "SELECT COUNT(*) FROM comfort WHERE time_s < ? AND occupied AND "
+                         "supply_air_c < supply_air_min_c", day_end)
+    (asym,), = query(db, "SELECT COUNT(*) FROM comfort WHERE time_s < ? AND occupied AND "
+                         "ABS(asymmetry_k) > asymmetry_max_k", day_end)
+    assert c["supply_air_below_limit_min"] == float(cold)
+    assert c["asymmetry_beyond_limit_min"] == float(asym)
+    assert c["comfort_unknown_min"] == float(query(
+        db, "SELECT COUNT(*) FROM comfort WHERE time_s < ? AND dgp IS NULL", day_end)[0][0])
+
+
 def check_discovery(configs: dict[str, dict[str, Any]], states: list[dict[str, Any]],
-                    got: list[Message]) -> None:
+                    got: list[Message], kpi: dict[str, Any]) -> None:
     components: Counter[str] = Counter()
     devices = []
     for topic, cfg in configs.items():
@@ -139,15 +173,19 @@ def check_discovery(configs: dict[str, dict[str, Any]], states: list[dict[str, A
             assert cfg["command_topic"].startswith(f"{BASE}/cmd/")
         rendered: list[str] = []
         if "state_topic" in cfg:
-            assert cfg["state_topic"] == f"{BASE}/state"
-            rendered = [render(cfg["value_template"], s) for s in states]
+            assert cfg["state_topic"] in (f"{BASE}/state", f"{BASE}/kpi")
+            sources = states if cfg["state_topic"] == f"{BASE}/state" else [kpi]
+            rendered = [render(cfg["value_template"], s) for s in sources]
         if component == "sensor" and "device_class" in cfg:
             assert cfg["unit_of_measurement"] in UNITS[cfg["device_class"]], topic
             assert cfg["state_class"] in STATE_CLASSES
             for text in rendered:
                 assert text == "None" or float(text) == float(text)  # a number or unknown
+        elif component == "sensor" and "unit_of_measurement" in cfg:  # no device class
+            assert cfg["unit_of_measurement"] == "%" and cfg["state_class"] in STATE_CLASSES
+            assert all(text == "None" or 0.0 <= float(text) <= 100.0 for text in rendered)
         elif component == "binary_sensor":
-            assert cfg["device_class"] == "problem"
+            assert cfg["device_class"] in {"problem", "occupancy"}
             assert set(rendered) <= {cfg["payload_on"], cfg["payload_off"]}
         elif component == "select":
             assert all(isinstance(o, str) for o in cfg["options"])
@@ -162,7 +200,7 @@ def check_discovery(configs: dict[str, dict[str, Any]], states: list[dict[str, A
             assert cfg["payload_press"]
     assert len(set(cfg["unique_id"] for cfg in configs.values())) == len(configs)
     assert len(set(devices)) == 1  # one device per panel
-    assert components["binary_sensor"] == 1 and components["select"] == 2
+    assert components["binary_sensor"] == 2 and components["select"] == 2
     assert components["number"] == 2 and components["button"] == 1
     # x1..x5, the cavity speed and the heat terms have sensors with their device classes.
     classes = {cfg["value_template"]: cfg.get("device_class") for cfg in configs.values()
@@ -171,5 +209,11 @@ def check_discovery(configs: dict[str, dict[str, Any]], states: list[dict[str, A
         assert classes[f"{{{{ value_json.measured.x{n}_c }}}}"] == "temperature"
     assert classes["{{ value_json.measured.v_cav_ms }}"] == "speed"
     assert sum(1 for c in classes.values() if c == "power") == 4
+    # the occupancy and the day's comfort figures (issue 36)
+    assert classes["{{ value_json.occupancy.occupied }}"] == "occupancy"
+    for key in ("occupied_min", "occupied_direct_sun_min", "supply_air_below_limit_min",
+                "asymmetry_beyond_limit_min"):
+        assert classes[f"{{{{ value_json.comfort.{key} }}}}"] == "duration"
+    assert classes["{{ value_json.comfort.dgp_p95 }}"] is None
     # The numeric sensors of x1..x5 read numbers in every state (the simulated sensors work).
     assert all(isinstance(s["measured"][f"x{n}_c"], float) for s in states for n in range(1, 6))

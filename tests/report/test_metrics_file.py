@@ -15,7 +15,15 @@ METRICS = {"dsfd_cycle_duration_seconds", "dsfd_decision_duration_seconds",
            "dsfd_last_cycle_timestamp_seconds", "dsfd_cycles", "dsfd_flagged_samples",
            "dsfd_write_failures", "dsfd_calibration_updates", "dsfd_calibration_age_seconds",
            "dsfd_parameter", "dsfd_louver_angle_degrees", "dsfd_airflow_regime",
-           "dsfd_damper_opening_ratio", "dsfd_hold_active", "dsfd_room_heat_watts"}
+           "dsfd_damper_opening_ratio", "dsfd_hold_active", "dsfd_room_heat_watts",
+           "dsfd_occupied", "dsfd_occupancy_override_active",
+           "dsfd_direct_sun_watts_per_square_meter", "dsfd_daylight_glare_probability",
+           "dsfd_supply_air_celsius", "dsfd_radiant_asymmetry_kelvin",
+           "dsfd_occupied_seconds", "dsfd_comfort_exceeded_seconds"}
+ALWAYS = ["00:00-24:00"]
+#: Every day occupied, and a supply-air limit warm enough to be broken in winter.
+COMFORT = {"occupancy": {d: ALWAYS for d in ("mon", "tue", "wed", "thu", "fri", "sat", "sun")},
+           "comfort": {"supply_air_min_c": 30.0}}
 
 
 def parse(text: str) -> dict[str, list]:
@@ -26,7 +34,7 @@ def test_metrics_file_is_complete_at_every_read_and_matches_the_database(tmp_pat
     prom = tmp_path / "textfile" / "dsfd-test.prom"
     prom.parent.mkdir()
     panel = write_panel(tmp_path / "panel.yaml", devices=False,
-                        extra={"daemon": {"metrics_file": str(prom)}})
+                        extra={"daemon": {"metrics_file": str(prom)}, **COMFORT})
     state = tmp_path / "state"
     proc = subprocess.Popen(
         dsfd_command("run", "--config", str(panel), "--dry-run", "--plant", "sim",
@@ -74,6 +82,32 @@ def test_metrics_file_is_complete_at_every_read_and_matches_the_database(tmp_pat
     (q_sol,), = query(db, "SELECT q_sol_trans_w FROM model ORDER BY cycle DESC LIMIT 1")
     assert set(heat) == {"q_cv_rd", "q_sol_trans", "q_air", "q_da"}
     assert heat["q_sol_trans"] == q_sol
+    check_comfort(families, db)
+
+
+def check_comfort(families: dict[str, list], db) -> None:
+    """The comfort series against the ``comfort`` table, counted here in SQL (issue 36)."""
+    occupied = [(s.labels["source"], s.value) for s in families["dsfd_occupied"]]
+    assert occupied == [("schedule", 1.0)]
+    assert families["dsfd_occupancy_override_active"][0].value == 0.0
+    (n_occupied,), = query(db, "SELECT SUM(occupied) FROM comfort")
+    total = {s.name: s.value for s in families["dsfd_occupied_seconds"]}
+    assert total["dsfd_occupied_seconds_total"] == n_occupied * 60.0 == CYCLES * 60.0
+    exceeded = {s.labels["limit"]: s.value for s in families["dsfd_comfort_exceeded_seconds"]
+                if s.name.endswith("_total")}
+    expected = query(db, "SELECT SUM(direct_sun_wm2 > direct_sun_max_wm2), SUM(dgp > dgp_max), "
+                         "SUM(supply_air_c < supply_air_min_c), "
+                         "SUM(ABS(asymmetry_k) > asymmetry_max_k) FROM comfort WHERE occupied")
+    assert exceeded == {k: 60.0 * (n or 0) for k, n in zip(
+        ("direct_sun", "glare", "draught", "asymmetry"), expected[0], strict=True)}
+    assert exceeded["draught"] > 0  # 30 °C supply air is not reached on a winter morning
+    last = query(db, "SELECT direct_sun_wm2, dgp, supply_air_c, asymmetry_k FROM comfort "
+                     "ORDER BY cycle DESC LIMIT 1")[0]
+    gauges = [families[name][0].value for name in (
+        "dsfd_direct_sun_watts_per_square_meter", "dsfd_daylight_glare_probability",
+        "dsfd_supply_air_celsius", "dsfd_radiant_asymmetry_kelvin")]
+    for got, want in zip(gauges, last, strict=True):
+        assert got == want or (want is None and got != got)  # NULL: NaN
 
 
 def run_without(module: str, args: list[str]) -> subprocess.CompletedProcess:

@@ -21,6 +21,9 @@ subtopic            payload
 ``damper_pct``      a number: a hold with the dampers open that far (``or_pct``)
 ``resume``          ``resume`` (the button's ``payload_press``) or ``{}``
 ``mode``            ``heating``, ``cooling`` or ``auto`` (or ``{"mode": "cooling"}``)
+``occupancy``       ``occupied until 18:00``, ``unoccupied until 2026-12-01T08:00`` or ``auto``
+                    (or ``{"state": "occupied", "until": "18:00"}``): the occupancy override
+                    of ``dsfd occupancy``
 ==================  ===========================================================================
 
 Every hold from the single-value topics lasts ``safety.manual_hold_min`` (to the daily reset
@@ -40,7 +43,7 @@ import re
 from typing import Any
 
 from dsfd.config.panel import REGIME_NAMES
-from dsfd.daemon.commands import CommandError
+from dsfd.daemon.commands import CommandError, occupancy_request
 
 __all__ = ["MAX_PAYLOAD_BYTES", "SHOWN_BYTES", "SUBTOPICS", "error_message", "request_of",
            "shown"]
@@ -52,7 +55,7 @@ MAX_PAYLOAD_BYTES = 1024
 SHOWN_BYTES = 200
 #: Command subtopics under ``<base>/cmd/``, as the discovery configs name them.
 SUBTOPICS: tuple[str, ...] = ("override", "regime", "louver_deg", "damper_pct", "resume",
-                              "mode")
+                              "mode", "occupancy")
 _OPTION = re.compile(r"^\s*(\d{1,2})\s*(?::\s*(.*?))?\s*$", re.DOTALL)
 
 
@@ -83,6 +86,10 @@ def request_of(subtopic: str, payload: bytes) -> dict[str, Any]:
     if subtopic == "mode":
         fields = _object(text) if text.startswith("{") else {"mode": text}
         return {"command": "mode", **fields}
+    if subtopic == "occupancy":
+        if text.startswith("{"):
+            return {"command": "occupancy", **_object(text)}
+        return occupancy_request(text)
     if subtopic == "regime":
         return {"command": "override", "regime": _regime(text)}
     field = "louver_deg" if subtopic == "louver_deg" else "or_pct"

@@ -32,7 +32,11 @@ platforms):
   (``homeassistant/components/sensor/const.py``, ``DEVICE_CLASS_UNITS``): temperature °C,
   speed m/s, power W, irradiance W/m², duration ms/s; ``state_class: measurement``;
 * the faults ``binary_sensor`` has ``device_class: problem`` and compares the rendered
-  template with ``payload_on``/``payload_off``;
+  template with ``payload_on``/``payload_off``; the occupancy ``binary_sensor`` likewise, with
+  ``device_class: occupancy`` (the occupancy the comfort limits follow, issue 36);
+* the day's comfort figures are sensors on the retained ``<base>/kpi`` topic
+  (``value_json.comfort.*``): durations in min, the DGPs percentile without a unit, the
+  share above the glare limit in %;
 * the regime and control-objective ``select`` entities need ``command_topic`` and
   ``options``; the louver and damper ``number`` entities have ``command_topic``, ``min``,
   ``max``, ``step`` and ``mode``; the resume ``button`` has ``command_topic`` and
@@ -54,6 +58,7 @@ import numpy as np
 from dsfd.config import PanelConfig
 from dsfd.config.panel import REGIME_NAMES
 from dsfd.daemon.commands import OBJECTIVE_MODES
+from dsfd.report.comfort_kpis import comfort_kpis
 from dsfd.report.kpis import local_dates
 from dsfd.signals import SENSOR_NAMES
 from dsfd.storage.schema import HEAT_TERMS
@@ -135,6 +140,9 @@ def state_message(panel_id: str, row: Mapping[str, Any],
         **_hold_fields(row),
         "objective_mode": row.get("objective_mode"),
         "objective_set_by": _objective_by(row),
+        "occupancy": _occupancy_fields(row),
+        "comfort": {k: _float(row.get(k)) for k in _COMFORT_QUANTITIES}
+        | {"violations": _json_strings(row.get("violations"))},
         "measured": {n: (v if q == GOOD and v is not None else None)
                      for n, (v, q) in samples.items() if n in _SENSOR_SET},
         "flagged": flagged,
@@ -162,6 +170,29 @@ def _hold_fields(row: Mapping[str, Any]) -> dict[str, Any]:
     return {"hold": source is not None, "hold_source": source,
             "hold_until_utc": None if expires is None else utc_iso(float(expires)),
             "hold_by": by, "hold_command_id": row.get("hold_command_id")}
+
+
+#: The comfort quantities of a cycle in the state message (table ``comfort``, issue 36).
+_COMFORT_QUANTITIES = ("direct_sun_wm2", "dgp", "supply_air_c", "asymmetry_k")
+
+
+def _occupancy_fields(row: Mapping[str, Any]) -> dict[str, Any]:
+    """The occupancy of a cycle, where it came from, and an operator's override in force."""
+    occupied = row.get("occupied")
+    until = row.get("occupancy_until_s")
+    return {"occupied": None if occupied is None else bool(occupied),
+            "source": row.get("occupancy_source"),
+            "override": row.get("occupancy_override"),
+            "override_until_utc": None if until is None else utc_iso(float(until)),
+            "override_command_id": row.get("occupancy_command_id")}
+
+
+def _json_strings(text: Any) -> list[str]:
+    try:
+        value = json.loads(text) if isinstance(text, str) else text
+    except ValueError:
+        return []
+    return [str(v) for v in value] if isinstance(value, list) else []
 
 
 def _objective_by(row: Mapping[str, Any]) -> str | None:
@@ -207,10 +238,13 @@ def day_bounds_s(day: date, utc_offset_h: float) -> tuple[float, float]:
 
 def daily_kpis(panel_id: str, day: date, rows: Sequence[Mapping[str, Any]], *,
                utc_offset_h: float, flagged_samples: int, calibration_updates: int,
-               heat_kwh: Mapping[str, float | None] | None = None, heat_hours: float = 0.0
+               heat_kwh: Mapping[str, float | None] | None = None, heat_hours: float = 0.0,
+               comfort_rows: Sequence[Mapping[str, Any]] = (), step_s: float = 60.0
                ) -> dict[str, Any]:
     """Key figures of one local day from its ``decisions`` rows in cycle order, with the
-    model's heat into the room by term [kWh] over ``heat_hours`` of steps with figures."""
+    model's heat into the room by term [kWh] over ``heat_hours`` of steps with figures, and
+    the comfort figures of its ``comfort`` rows, each a cycle period ``step_s`` long
+    (:func:`dsfd.report.comfort_kpis.comfort_kpis`)."""
     methods: dict[str, int] = {}
     for r in rows:
         methods[str(r["method"])] = methods.get(str(r["method"]), 0) + 1
@@ -230,6 +264,7 @@ def daily_kpis(panel_id: str, day: date, rows: Sequence[Mapping[str, Any]], *,
         "decision_ms_p99": float(np.percentile(decide, 99)) if decide.size else None,
         "heat_kwh": {q: (heat_kwh or {}).get(q) for q in HEAT_TERMS},
         "heat_hours": heat_hours,
+        "comfort": comfort_kpis(comfort_rows, step_s=step_s),
     }
 
 
@@ -271,6 +306,24 @@ _SENSORS: tuple[tuple[str, str, str, str | None, str], ...] = (
 )
 
 
+#: (key, name, KPI key, device_class, unit, icon) of the day's comfort figures, read from the
+#: retained ``<base>/kpi`` (the last completed local day; issue 36).
+_COMFORT_SENSORS: tuple[tuple[str, str, str, str | None, str | None, str], ...] = (
+    ("occupied_time", "Occupied time (last day)", "occupied_min", "duration", "min",
+     "mdi:account-clock"),
+    ("direct_sun_time", "Occupied time with direct sun (last day)",
+     "occupied_direct_sun_min", "duration", "min", "mdi:white-balance-sunny"),
+    ("dgp_p95", "Glare DGPs 95th percentile (last day)", "dgp_p95", None, None,
+     "mdi:sun-wireless"),
+    ("dgp_above_limit", "Occupied time above the glare limit (last day)",
+     "dgp_above_limit_pct", None, "%", "mdi:sun-wireless-outline"),
+    ("draught_time", "Supply air below the draught limit (last day)",
+     "supply_air_below_limit_min", "duration", "min", "mdi:weather-windy"),
+    ("asymmetry_time", "Radiant asymmetry beyond the limit (last day)",
+     "asymmetry_beyond_limit_min", "duration", "min", "mdi:thermometer-lines"),
+)
+
+
 def discovery_configs(cfg: PanelConfig, *, base_topic: str, discovery_prefix: str,
                       version: str) -> list[tuple[str, dict[str, Any]]]:
     """(config topic, payload) of every entity of the panel's Home Assistant device."""
@@ -304,6 +357,17 @@ def discovery_configs(cfg: PanelConfig, *, base_topic: str, discovery_prefix: st
         value_template="{{ value_json.fault }}", payload_on="True", payload_off="False",
         json_attributes_topic=state,
         json_attributes_template="{{ {'faults': value_json.faults} | tojson }}")
+    add("binary_sensor", "occupancy", "Occupancy", state_topic=state,
+        device_class="occupancy", value_template="{{ value_json.occupancy.occupied }}",
+        payload_on="True", payload_off="False", json_attributes_topic=state,
+        json_attributes_template="{{ {'source': value_json.occupancy.source, 'override': "
+        "value_json.occupancy.override, 'until': value_json.occupancy.override_until_utc} "
+        "| tojson }}")
+    for key, name, kpi, device_class, unit, icon in _COMFORT_SENSORS:
+        fields = {"device_class": device_class, "unit_of_measurement": unit}
+        add("sensor", key, name, state_topic=f"{base_topic}/kpi",
+            value_template=f"{{{{ value_json.comfort.{kpi} }}}}", state_class="measurement",
+            icon=icon, **{k: v for k, v in fields.items() if v is not None})
     cmd = f"{base_topic}/cmd"
     add("select", "regime", "Airflow regime", state_topic=state,
         value_template="{{ value_json.command.regime_option }}", command_topic=f"{cmd}/regime",

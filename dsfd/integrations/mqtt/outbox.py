@@ -24,9 +24,9 @@ from typing import Any
 
 from dsfd.integrations.mqtt.messages import day_bounds_s
 from dsfd.report.kpis import J_PER_KWH
-from dsfd.storage.schema import BUSY_TIMEOUT_MS, HEAT_TERMS, iso_now
+from dsfd.storage.schema import BUSY_TIMEOUT_MS, COMFORT_COLUMNS, HEAT_TERMS, iso_now
 
-__all__ = ["Key", "Outbox", "PendingCycle", "Status"]
+__all__ = ["COMFORT_FIELDS", "Key", "Outbox", "PendingCycle", "Status"]
 
 #: A cycle's place in the outbox: (run_id, cycle).
 Key = tuple[int, int]
@@ -34,7 +34,11 @@ Key = tuple[int, int]
 _DECISION_COLUMNS = ("run_id, cycle, slot, time_s, time_utc, method, fallback_reason, heating, "
                      "phi_deg, afr, or_pct, write_status, trace, timings_ms, cycle_ms, "
                      "skipped_slots, hold_source, hold_expires_s, hold_command_id, "
-                     "objective_mode, mode_command_id")
+                     "objective_mode, mode_command_id, occupancy_override, "
+                     "occupancy_until_s, occupancy_command_id")
+#: What a cycle's ``comfort`` row adds to its state (schema 6, issue 36).
+COMFORT_FIELDS: tuple[str, ...] = ("occupied", "occupancy_source", "direct_sun_wm2", "dgp",
+                                   "supply_air_c", "asymmetry_k", "violations")
 #: What the model made of a cycle (table ``model``, issue 21): the state estimate and the
 #: room-side heat of the step that ended, with the names the state message uses.
 MODEL_FIELDS: tuple[str, ...] = (*(f"est_x{i}_c" for i in range(1, 7)),
@@ -42,9 +46,11 @@ MODEL_FIELDS: tuple[str, ...] = (*(f"est_x{i}_c" for i in range(1, 7)),
 _STATE_QUERY = (
     "SELECT " + ", ".join(f"d.{c.strip()}" for c in _DECISION_COLUMNS.split(","))
     + ", " + ", ".join(f"m.{c}" for c in MODEL_FIELDS)
+    + ", " + ", ".join(f"co.{c}" for c in COMFORT_FIELDS)
     + ", runs.mode AS mode, c.source AS hold_by_source, c.requester AS hold_by_requester "
     "FROM decisions d JOIN runs USING (run_id) "
     "LEFT JOIN model m ON m.run_id = d.run_id AND m.cycle = d.cycle "
+    "LEFT JOIN comfort co ON co.run_id = d.run_id AND co.cycle = d.cycle "
     "LEFT JOIN commands c ON c.command_id = d.hold_command_id "
     "WHERE (d.run_id, d.cycle) > (?, ?) AND d.time_s >= ? ORDER BY d.run_id, d.cycle LIMIT ?")
 
@@ -207,6 +213,14 @@ class Outbox:
             "SELECT COUNT(*) FROM parameters WHERE source = 'online' AND time_s >= ? "
             "AND time_s < ?", (start, end)).fetchone()[0]
         return rows, int(flagged), int(updates)
+
+    def day_comfort(self, day: date, utc_offset_h: float) -> list[dict[str, Any]]:
+        """A local day's ``comfort`` rows (schema 6) in stored order."""
+        start, end = day_bounds_s(day, utc_offset_h)
+        cols = ", ".join(c for c, _ in COMFORT_COLUMNS)
+        return [dict(r) for r in self.conn.execute(
+            f"SELECT {cols} FROM comfort WHERE time_s >= ? AND time_s < ? "
+            "ORDER BY run_id, cycle", (start, end))]
 
     def day_heat(self, day: date, utc_offset_h: float, *, step_s: float
                  ) -> tuple[dict[str, float | None], float]:

@@ -359,7 +359,9 @@ class MqttPublisher:
         heat, hours = self.outbox.day_heat(day, offset, step_s=self.cfg.model.step_s)
         kpis = daily_kpis(self.cfg.panel.id, day, rows, utc_offset_h=offset,
                           flagged_samples=flagged, calibration_updates=updates,
-                          heat_kwh=heat, heat_hours=hours)
+                          heat_kwh=heat, heat_hours=hours,
+                          comfort_rows=self.outbox.day_comfort(day, offset),
+                          step_s=self.cfg.model.step_s)
         client.publish(f"{self.base}/kpi", dumps(kpis), qos=1, retain=True)
         self.status.kpi_day = day.isoformat()
         self._dirty = True

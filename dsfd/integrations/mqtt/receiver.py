@@ -10,7 +10,7 @@ command, and the control loop knows nothing of them. The receiver's thread then,
    unknown subtopic;
 2. turns the payload into a request (:func:`~dsfd.integrations.mqtt.commands.request_of`)
    and checks it with :func:`~dsfd.daemon.commands.validate_command`, the validation of
-   ``dsfd override``/``resume``/``mode``;
+   ``dsfd override``/``resume``/``mode``/``occupancy``;
 3. inserts it into the ``commands`` table (:func:`dsfd.storage.commands.submit`) with source
    ``mqtt`` and as requester the broker and the topic (MQTT 3.1.1 does not tell a receiver
    who published). The loop picks it up at its next cycle, validates it again against the
