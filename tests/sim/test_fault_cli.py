@@ -100,3 +100,14 @@ def test_a_dry_run_takes_repeated_faults_and_says_so(tmp_path):
     assert done.returncode == 0, done.stderr
     for f in faults:
         assert f"simulated fault {f}" in done.stdout
+
+
+@pytest.mark.parametrize(("args", "named"), [
+    (["closed-loop", "--fault", "soiling:+1h:x"], "rate 'x'"),
+    (["model", "--fault", "soiling:+1h:1"], "--fault only applies to the closed-loop target"),
+])
+def test_dsfd_bench_refuses_a_bad_or_misplaced_fault(args, named):
+    done = subprocess.run(dsfd_command("bench", *args), cwd=ROOT, capture_output=True,
+                          text=True, timeout=120, check=False)
+    assert done.returncode == 2
+    assert named in done.stderr
