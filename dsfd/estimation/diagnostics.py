@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["Cusum", "Evidence", "Finding", "ParameterSettings", "ResidualSettings",
-           "page_cusum", "parameter_change", "residual_change"]
+           "cusum_confidence", "page_cusum", "parameter_change", "residual_change"]
 
 #: MAD → σ for normal data (Rousseeuw & Croux 1993).
 MAD_TO_SD = 1.4826
@@ -129,7 +129,8 @@ def page_cusum(z: np.ndarray, *, k: float, h: float) -> Cusum:
     return Cusum(None, 0, z.size, stat)
 
 
-def _confidence(statistic: float, threshold: float) -> float:
+def cusum_confidence(statistic: float, threshold: float) -> float:
+    """:attr:`Finding.confidence` of a CUSUM: statistic / (2 × threshold), at most 1."""
     return float(min(1.0, statistic / (2.0 * threshold)))
 
 
@@ -232,7 +233,7 @@ def residual_change(times_s: np.ndarray, residuals: np.ndarray, *, signal: str, 
     ev = Evidence(signal=f"residual:{signal}", shift=shift, shift_sd=shift_sd, unit=unit,
                   since_s=start_s, statistic=float(cs.statistic[-1]), threshold=st.h_sd)
     direction = "above" if cs.side > 0 else "below"
-    return Finding(kind="residual_shift", confidence=_confidence(ev.statistic, st.h_sd),
+    return Finding(kind="residual_shift", confidence=cusum_confidence(ev.statistic, st.h_sd),
                    start_s=start_s, detected_s=float((blocks[cs.alarm] + 1) * st.block_s),
                    evidence=(ev,), action=(
                        f"{signal} reads {abs(shift):.3g} {unit} {direction} what the "
@@ -367,7 +368,7 @@ def parameter_change(times_s: np.ndarray, values: np.ndarray, sds: np.ndarray, *
                   shift_sd=float(np.nanmean(z[after])), unit=unit, since_s=float(t[cs.start]),
                   statistic=float(cs.statistic[-1]), threshold=st.h_sd)
     direction = "risen" if cs.side > 0 else "fallen"
-    return Finding(kind="parameter_shift", confidence=_confidence(ev.statistic, st.h_sd),
+    return Finding(kind="parameter_shift", confidence=cusum_confidence(ev.statistic, st.h_sd),
                    start_s=ev.since_s, detected_s=float(t[cs.alarm]), evidence=(ev,),
                    action=(f"the calibrated {name} has {direction} by {abs(ev.shift_sd):.1f} "
                            "posterior sd: the façade changed (glass, screen, dampers) or the "
