@@ -106,8 +106,8 @@ def page_cusum(z: np.ndarray, *, k: float, h: float) -> Cusum:
 
     Non-finite ``z`` leave both sides unchanged. With independent standard normal z,
     k = 0.75 and h = 8, the mean run to a false alarm of one side is about 8·10⁵ values
-    (Siegmund's approximation (e^{2kb} − 2kb − 1)/(2k²), b = h + 1.166; Basseville &
-    Nikiforov 1993, §5.2).
+    (Siegmund's approximation (e^{2kb} − 2kb − 1)/(2k²), b = h + 1.166, as given by
+    Basseville & Nikiforov 1993).
     """
     z = np.asarray(z, float)
     s_pos = s_neg = 0.0
@@ -284,8 +284,8 @@ def _long_run_sd(dev: np.ndarray, floor: float) -> float:
 
     A sum of n AR(1)-like values has the variance of n independent ones times
     (1 + φ)/(1 − φ); the CUSUM sums, so its units must be the long-run sd, or correlated
-    errors reach the threshold far sooner than independent ones (Basseville & Nikiforov
-    1993, §8.1; the batch-means variance of Box, Jenkins & Reinsel, ch. 2).
+    errors reach the threshold far sooner than independent ones (the variance of the mean
+    of an AR(1) process, Box, Jenkins & Reinsel; docs/model.md#diagnostics-residuals).
     """
     ok = dev[np.isfinite(dev)]
     c = float(np.median(ok))

@@ -176,3 +176,12 @@ def test_faulty_sensors_read_truth_changed_by_the_fault(suwon, rmis, fault, sens
         assert reading == pytest.approx(expected, abs=1e-12)
         assert not math.isclose(reading, truth, abs_tol=1e-6) or since_s == 0
     assert checked == 5
+
+
+def test_a_louver_slip_needs_a_louver(suwon, rmis):
+    import dataclasses
+
+    bare = dataclasses.replace(suwon, louver=None)
+    with pytest.raises(ValueError, match="the panel has no louver"):
+        Plant(bare, OPTIONS, seed=0, weather_series=rmis,
+              faults=(parse_fault("louver-slip:+0s:1"),))
