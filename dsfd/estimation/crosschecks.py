@@ -36,15 +36,19 @@ class FlowCheckSettings:
         An open path is judged only on readings with at least this driving temperature
         difference (3 K: a stack of a few kelvin moves ~0.1 m/s through the paper's façade).
     min_contrast_ms : float, [m/s]
-        An open path "moves air" when its median speed exceeds the closed cavity's median by
-        this much (0.05 m/s, about twice the anemometer's noise).
+        An open path "moves air" when its median speed exceeds the closed cavity's median
+        (0 when the cavity was not closed) by this much (0.02 m/s). An unsigned anemometer
+        at zero flow reads its noise clipped at zero, whose median is about 0; a path that
+        moves air at all lifts the median above the noise sd (0.02 m/s). On the truth plant
+        a winter supply path (EB → IT) moved 0.03–0.05 m/s (medians), the same path with a
+        damper stuck shut 0.000–0.011 m/s.
     closed_max_ms : float, [m/s]
         A closed cavity whose median speed is above this moves air it should not (0.15 m/s).
     """
 
     min_samples: int = 30
     min_drive_k: float = 3.0
-    min_contrast_ms: float = 0.05
+    min_contrast_ms: float = 0.02
     closed_max_ms: float = 0.15
 
 
