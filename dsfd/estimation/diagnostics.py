@@ -72,7 +72,8 @@ class Finding:
     start_s : float, [s]
         Estimated start of the change.
     detected_s : float, [s]
-        When the evidence crossed the threshold.
+        When the evidence crossed the threshold (the CUSUMs), or the last reading the
+        evidence rests on (the cavity cross-check, which judges a window).
     evidence : tuple of Evidence
     action : str
         What a person should check; names every cause the evidence cannot separate.

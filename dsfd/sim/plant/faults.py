@@ -237,6 +237,26 @@ class PlantFaults:
             f *= 1.0 + a.spec.rate * a.days(t)
         return f
 
+    def actuate(self, t: float, phi_deg: float, targets: np.ndarray,
+                grid_deg: Sequence[float] | None) -> tuple[float, np.ndarray]:
+        """Where a command (louver ``phi_deg``, blade ``targets`` (4,) [-]) really sends the
+        slats and blades at ``t``: stuck blades at their position, slipped slats off by
+        their steps (``grid_deg`` None: no louver)."""
+        out = np.array(targets, float)
+        for j, pos in self.stuck(t).items():
+            out[j] = pos
+        if grid_deg is not None:
+            phi_deg = self.louver(t, phi_deg, grid_deg)
+        return phi_deg, out
+
+    def open_mask(self, t: float, commanded: np.ndarray) -> np.ndarray:
+        """Dampers that are open or opening at ``t`` (bool (4,)): the commanded set, a stuck
+        one open only if stuck open."""
+        out = np.array(commanded, bool)
+        for j, pos in self.stuck(t).items():
+            out[j] = pos > 0.0
+        return out
+
     def stuck(self, t: float) -> dict[int, float]:
         """Stuck dampers at ``t``: opening index → position [-]."""
         return {DAMPERS.index(str(a.spec.target)): a.spec.rate / 100.0

@@ -196,21 +196,9 @@ class Plant:
     def _true_targets(self, t: float) -> tuple[float, np.ndarray]:
         """Where the command sends the louver and the dampers at ``t``, faults included
         (a stuck blade, slipped slats); the read-back still reports the command."""
-        cmd = self._command
-        targets = self._targets(cmd)
-        for j, pos in self.faults.stuck(t).items():
-            targets[j] = pos
-        phi = cmd.phi_deg
-        if self.cfg.louver is not None:
-            phi = self.faults.louver(t, phi, self.cfg.louver.angles_deg())
-        return phi, targets
-
-    def _target_open(self, t: float) -> np.ndarray:
-        """Dampers of the commanded set, a stuck one open only if stuck open (bool (4,))."""
-        want = damper_mask(self._command.afr)
-        for j, pos in self.faults.stuck(t).items():
-            want[j] = pos > 0.0
-        return want & (self.model.openings.area_m2 > 0)
+        lv = self.cfg.louver
+        return self.faults.actuate(t, self._command.phi_deg, self._targets(self._command),
+                                   None if lv is None else lv.angles_deg())
 
     def apply(self, command: Command | Mapping) -> Command:
         """Validate and apply a command (raises :class:`~dsfd.sim.plant.actuators.CommandError`).
@@ -256,7 +244,8 @@ class Plant:
         table, row = self.tables.step(k)
         act, opt = self.actuators, self.options
         fa = table.a[row]
-        target_open = self._target_open(t)
+        target_open = (self.faults.open_mask(t, damper_mask(self._command.afr))
+                       & (self.model.openings.area_m2 > 0))
         y_now = act.dampers_at(t)
         active = tuple(int(i) for i in np.flatnonzero(
             (target_open | (y_now > DAMPER_SHUT)) & (self.model.openings.area_m2 > 0)))
