@@ -46,6 +46,7 @@ from dsfd.sim.closed_loop import (
     ClosedLoopSettings,
     run_closed_loop,
 )
+from dsfd.sim.plant.faults import FaultSpec
 from dsfd.sim.replay import at_site
 from dsfd.weather import WeatherSeries
 
@@ -147,7 +148,8 @@ def bench_closed_loop(cfg: PanelConfig, series: WeatherSeries, *, days: float = 
                       controllers: Sequence[str] = CONTROLLERS, warmup_h: float = WARMUP_H,
                       progress: Callable[[str], None] | None = None,
                       on_figures: Callable[[dict[str, float]], None] | None = None,
-                      oracle_cache: OracleCache | None = None) -> dict[str, float]:
+                      oracle_cache: OracleCache | None = None,
+                      faults: tuple[FaultSpec, ...] = ()) -> dict[str, float]:
     """Run every controller on every case; flat figures ``<case>.<controller>.<figure>``
     and ``<case>.mpc_share_of_plant_oracle_saving`` (and the other shares) when ``rule`` and
     ``plant-oracle`` are among ``controllers`` (a run of some controllers alone, e.g. to add
@@ -155,7 +157,10 @@ def bench_closed_loop(cfg: PanelConfig, series: WeatherSeries, *, days: float = 
     copy of the figures so far after every controller's run (a plant-oracle day takes about
     an hour: the CLI saves them, so a stopped bench keeps what it finished). With
     ``oracle_cache`` the plant oracle's figures of a case are taken from it where it has them
-    (``<case>.plant-oracle.cached`` = 1) and stored in it where it does not."""
+    (``<case>.plant-oracle.cached`` = 1) and stored in it where it does not. ``faults``
+    (:mod:`dsfd.sim.plant.faults`, relative starts from each case's run start, warm-up
+    included) are in every controller's plant; the cache, which knows clean plants only, is
+    then not used."""
     unknown = sorted(set(cases) - set(CASES))
     if unknown:
         raise ValueError(f"unknown case(s) {unknown}; choose from {', '.join(CASES)}")
@@ -164,7 +169,10 @@ def bench_closed_loop(cfg: PanelConfig, series: WeatherSeries, *, days: float = 
         raise ValueError(f"unknown controller(s) {unknown}; choose from {', '.join(CONTROLLERS)}")
     skies = classify_days(series, cfg)
     first = at_site(series, cfg).coverage_s[0]
-    fig: dict[str, float] = {"seed": float(seed), "days": float(days)}
+    fig: dict[str, float] = {"seed": float(seed), "days": float(days),
+                             "faults": float(len(faults))}
+    if faults:
+        oracle_cache = None
     for case in cases:
         sky, season = case.split("-")
         day = skies[sky]
@@ -184,7 +192,7 @@ def bench_closed_loop(cfg: PanelConfig, series: WeatherSeries, *, days: float = 
             if cached is None:
                 res = run_closed_loop(ccfg, cseries, ClosedLoopSettings(
                     controller=name, calibration="online", seed=seed, hours=hours,
-                    start_s=start))
+                    start_s=start, faults=faults))
                 scored = _scored(res, day.start_s)
                 if oracle_cache is not None and name == "plant-oracle":
                     oracle_cache.put(oracle_key, scored)

@@ -122,6 +122,7 @@ def _bench_closed_loop(args: argparse.Namespace) -> dict[str, float]:
         share_table,
     )
     from dsfd.bench.oracle_cache import OracleCache
+    from dsfd.sim.plant.faults import parse_fault
     from dsfd.sim.replay import load_weather
 
     controllers = CONTROLLERS if args.controllers is None else tuple(
@@ -132,7 +133,8 @@ def _bench_closed_loop(args: argparse.Namespace) -> dict[str, float]:
         progress=lambda msg: print(msg, file=sys.stderr, flush=True),
         on_figures=None if args.json is None else lambda fig: _write_json(
             args.json, args.target, {**fig, "partial": 1.0}),
-        oracle_cache=None if args.oracle_cache is None else OracleCache(args.oracle_cache))
+        oracle_cache=None if args.oracle_cache is None else OracleCache(args.oracle_cache),
+        faults=tuple(parse_fault(f) for f in args.fault))
     cfg = load_panel(args.config)
     series = load_weather(args.weather or "rmis-golden-2022-01")
     if args.seeds is None:
@@ -238,6 +240,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--controllers", default=None,
                    help="closed-loop: comma-separated controllers (default "
                    f"{', '.join(BENCH_CONTROLLERS)})")
+    p.add_argument("--fault", action="append", default=[], metavar="KIND:START:RATE",
+                   help="closed-loop: a slow fault of the truth plant, START relative to "
+                   "each case's run start (warm-up included) or ISO UTC (repeatable; grammar "
+                   "in docs/faults.md#simulated-faults)")
     p.add_argument("--plant", choices=("lumped", "truth"), default=None,
                    help="identify: lumped = the lumped-equivalent plant (the model's structure, "
                    "true parameters known; default), truth = the full-fidelity truth plant")
@@ -290,6 +296,9 @@ def run(args: argparse.Namespace) -> int:
         if value is not None and not value > 0:
             print(f"dsfd bench: --{name} {value}: must be positive", file=sys.stderr)
             return 2
+    if args.fault and args.target != "closed-loop":
+        print("dsfd bench: --fault only applies to the closed-loop target", file=sys.stderr)
+        return 2
     if args.target != "identify":
         for name in IDENTIFY_ONLY:
             if getattr(args, name) is not None:

@@ -62,6 +62,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--start", default=None, metavar="ISO",
                    help="UTC start of the simulated clock, e.g. 2022-01-01T15:00:00Z")
     p.add_argument("--seed", type=int, default=1, help="seed of the simulated plant")
+    p.add_argument("--fault", action="append", default=[], metavar="KIND:START:RATE",
+                   help="with --plant sim: a slow fault of the simulated plant, e.g. "
+                   "soiling:+1d:1.5 (%% solar transmittance lost per day), "
+                   "damper-stuck.EB:+2h:0, louver-slip:+0s:1, tc-drift.x3:+0s:0.5, "
+                   "screen:+1d:1, tc-offset.x1:2022-01-02T06:00:00Z:1, anemometer:+0s:0.7 "
+                   "(repeatable; grammar in docs/faults.md#simulated-faults)")
     p.add_argument("--summary-json", type=Path, default=None, metavar="OUT",
                    help="also write the end-of-run summary as JSON")
     p.add_argument("--log-format", choices=["auto", "json", "console"], default="auto",
@@ -80,6 +86,15 @@ def _check_options(args: argparse.Namespace) -> str | None:
         return "--weather and --plant-fidelity only apply to --plant sim"
     if args.start is not None and args.plant != "sim" and args.speed is None:
         return "--start needs a simulated clock (--plant sim or --speed)"
+    if args.fault and args.plant != "sim":
+        return "--fault only applies to --plant sim (the simulated plant)"
+    from dsfd.sim.plant.faults import FaultSpecError, parse_fault
+
+    for text in args.fault:
+        try:
+            parse_fault(text)
+        except FaultSpecError as exc:
+            return f"--fault {exc}"
     return None
 
 
@@ -152,7 +167,7 @@ def run(args: argparse.Namespace) -> int:
     opts = RunOptions(config_path=args.config, dry_run=args.dry_run, plant=args.plant,
                       plant_fidelity=args.plant_fidelity, speed=args.speed, cycles=args.cycles,
                       state_dir=args.state_dir, weather=args.weather, start_s=start_s,
-                      seed=args.seed)
+                      seed=args.seed, faults=tuple(args.fault))
     try:
         cfg = load_for_run(args.config, simulated_plant=opts.simulated_plant,
                            dry_run=opts.dry_run)
@@ -173,10 +188,10 @@ def run(args: argparse.Namespace) -> int:
 
         try:
             opts = _until_the_weather_ends(cfg, opts)
+            plant = plant_for_run(cfg, opts)  # ValueError: e.g. louver-slip without a louver
         except (FileNotFoundError, ValueError) as exc:
             print(f"dsfd run: {exc}", file=sys.stderr)
             return EXIT_USAGE
-        plant = plant_for_run(cfg, opts)
     configure_logging(json={"auto": None, "json": True, "console": False}[args.log_format])
     _announce(cfg, opts, state_dir, temporary=temporary)
     import sqlite3

@@ -110,6 +110,8 @@ class RunOptions:
     weather: str | None = None
     start_s: float | None = None
     seed: int = 1
+    #: ``--fault`` arguments of a simulated plant (``dsfd.sim.plant.faults``, parsed there).
+    faults: tuple[str, ...] = ()
     #: Called after every cycle (benchmarks); must be quick.
     on_cycle: Callable[[CycleOutcome], None] | None = None
     #: Builds the cycle instead of :class:`~dsfd.daemon.loop.Controller` (same arguments):

@@ -11,7 +11,11 @@ Pure core (no files, sockets, clocks or logging configuration):
 * :mod:`~dsfd.estimation.fit` — one bounded, robust, prior-regularised least-squares fit;
 * :mod:`~dsfd.estimation.calibration` — :class:`OnlineCalibrator` and :func:`offline_fit`;
 * :mod:`~dsfd.estimation.state` — :class:`CalibrationState` and its JSON mapping;
-* :mod:`~dsfd.estimation.validation` — replay scores in the layout of Tables 1 and 2.
+* :mod:`~dsfd.estimation.validation` — replay scores in the layout of Tables 1 and 2;
+* :mod:`~dsfd.estimation.diagnostics` — change detectors on prediction errors and the
+  parameter history, and the :class:`~dsfd.estimation.diagnostics.Finding` they return;
+* :mod:`~dsfd.estimation.crosschecks` — physical cross-checks (cavity speed against the
+  commanded dampers, panes against the outdoor air at night).
 
 Files: :mod:`dsfd.storage.calibration_file`. Settings: ``calibration:`` of the panel
 (:class:`dsfd.config.calibration.Calibration`). A consumer of the calibrated model uses

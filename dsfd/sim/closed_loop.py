@@ -78,6 +78,7 @@ from dsfd.sim.oracle_controllers import (
 from dsfd.sim.oracle_search import PlantOracle, SearchSettings, room_objective_j
 from dsfd.sim.plant.actuators import Command
 from dsfd.sim.plant.config import PlantOptions
+from dsfd.sim.plant.faults import FaultSpec
 from dsfd.sim.plant.model import ROOM_FLOWS
 from dsfd.sim.plant.plant import Plant
 from dsfd.sim.replay import at_site, step_window
@@ -125,6 +126,9 @@ class ClosedLoopSettings:
         Plant switches (default: the full stratified plant).
     search : SearchSettings
         What ``plant-oracle`` rolls out.
+    faults : tuple of FaultSpec
+        Simulated faults of the plant (:mod:`dsfd.sim.plant.faults`; relative starts count
+        from the run's start); every controller's plant has them, the oracles' included.
     """
 
     controller: ControllerName = "mpc"
@@ -136,6 +140,7 @@ class ClosedLoopSettings:
     fixed_command: Command = DEFAULT_FIXED
     options: PlantOptions | None = None
     search: SearchSettings = field(default_factory=SearchSettings)
+    faults: tuple[FaultSpec, ...] = ()
 
     def check(self) -> None:
         """Raise ValueError for an impossible combination (the message says what to do)."""
@@ -281,7 +286,8 @@ def run_closed_loop(cfg: PanelConfig, series: WeatherSeries, settings: ClosedLoo
     if fits < 1:
         raise ValueError("the weather ends within one control horizon of the start")
     n = min(n, fits)
-    plant = Plant(cfg, settings.options, seed=settings.seed, weather_series=site)
+    plant = Plant(cfg, settings.options, seed=settings.seed, weather_series=site,
+                  faults=settings.faults)
     plant.reset(start, command=settings.fixed_command if settings.controller == "fixed"
                 else None)
     if state_dir is not None:

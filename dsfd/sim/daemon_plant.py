@@ -21,6 +21,7 @@ from dsfd.daemon.runner import RunOptions
 from dsfd.drivers.simulated import SimulatedDriver
 from dsfd.measured import iso_utc
 from dsfd.sim.plant.config import PlantOptions
+from dsfd.sim.plant.faults import FaultSpec, parse_fault
 from dsfd.sim.plant.plant import Plant
 from dsfd.sim.replay import at_site, load_weather
 from dsfd.weather import WeatherSeries
@@ -107,8 +108,8 @@ def repeat_weather(series: WeatherSeries, *, until_s: float) -> WeatherSeries:
 
 def simulated_plant(cfg: PanelConfig, *, weather: str = DEFAULT_WEATHER,
                     start_s: float | None = None, cycles: int | None = None, seed: int = 1,
-                    period_s: float | None = None, options: PlantOptions | None = None
-                    ) -> SimulatedPlant:
+                    period_s: float | None = None, options: PlantOptions | None = None,
+                    faults: tuple[FaultSpec, ...] = ()) -> SimulatedPlant:
     """Build the plant for a dry run.
 
     Parameters
@@ -125,6 +126,9 @@ def simulated_plant(cfg: PanelConfig, *, weather: str = DEFAULT_WEATHER,
         Cycle period (default ``cfg.daemon.cycle_period_s``).
     options : PlantOptions, optional
         Plant switches (default: the full-fidelity truth plant).
+    faults : tuple of FaultSpec
+        Simulated faults (:mod:`dsfd.sim.plant.faults`); relative starts count from the
+        run's start.
 
     Raises
     ------
@@ -135,14 +139,18 @@ def simulated_plant(cfg: PanelConfig, *, weather: str = DEFAULT_WEATHER,
     series, start_s = weather_window(cfg, weather=weather, start_s=start_s)
     if cycles is not None:
         series = repeat_weather(series, until_s=start_s + (cycles + 2) * period)
-    plant = Plant(cfg, options or PlantOptions(), seed=seed, weather_series=series)
+    plant = Plant(cfg, options or PlantOptions(), seed=seed, weather_series=series,
+                  faults=faults)
     plant.reset(start_s)
-    notes = (f"weather: {series.source}", *series.notes)
+    notes = (f"weather: {series.source}", *series.notes,
+             *(f"simulated fault {f.text or f.kind}" for f in faults))
     return SimulatedPlant(SimulatedDriver(plant), plant, float(start_s), series, notes)
 
 
 def plant_for_run(cfg: PanelConfig, opts: RunOptions) -> SimulatedPlant:
-    """The simulated plant ``dsfd run --plant sim`` asks for (weather, start, seed, fidelity)."""
+    """The simulated plant ``dsfd run --plant sim`` asks for (weather, start, seed, fidelity,
+    faults); :class:`~dsfd.sim.plant.faults.FaultSpecError` for a bad ``--fault``."""
     return simulated_plant(cfg, weather=opts.weather or DEFAULT_WEATHER, start_s=opts.start_s,
                            cycles=opts.cycles, seed=opts.seed,
-                           options=plant_options(opts.plant_fidelity, cfg.model))
+                           options=plant_options(opts.plant_fidelity, cfg.model),
+                           faults=tuple(parse_fault(f) for f in opts.faults))

@@ -168,3 +168,17 @@ def test_a_run_lifts_the_wall_clock_budgets_and_counts_what_was_late(suwon, rmis
     assert res.calibration_updates >= 1
     assert res.late["late_calibrations"] >= 1
     assert res.summary()["late_calibrations"] == res.late["late_calibrations"]
+
+
+def test_a_fault_reaches_every_controllers_plant(suwon, rmis_raw, rmis):
+    """``faults``: the fixed controller holds the interior loop (regime 1, IB + IT) open; with
+    IB stuck shut no cavity air reaches the room, as with the loop closed."""
+    from dsfd.sim.plant.faults import parse_fault
+
+    loop = Command(0.0, 1, 100.0)
+    clean = _run(suwon, rmis_raw, rmis, "fixed", hours=0.5, fixed_command=loop)
+    stuck = _run(suwon, rmis_raw, rmis, "fixed", hours=0.5, fixed_command=loop,
+                 faults=(parse_fault("damper-stuck.IB:+0s:0"),))
+    assert set(stuck.commands) == {loop}
+    assert np.abs(clean.heat_j["q_air"]).sum() > 1e3
+    np.testing.assert_array_equal(stuck.heat_j["q_air"], 0.0)

@@ -87,6 +87,7 @@ class Piece:
     static: dict = field(default_factory=dict)
     pc: float = 0.0
     target_open_list: list[bool] = field(default_factory=list)
+    k_factor: float = 1.0  # every opening's resistance × this (a clogged screen)
 
 
 class _Films(NamedTuple):
@@ -222,7 +223,8 @@ class PlantModel:
 
     def resistances(self, ctx: Piece, t: float, k_l: float) -> list[float]:
         y = ctx.act.dampers_at(t).tolist()
-        return opening_resistance(self.openings, y, ctx.target_open_list, self.params.f, k_l)
+        k = opening_resistance(self.openings, y, ctx.target_open_list, self.params.f, k_l)
+        return k if ctx.k_factor == 1.0 else [v * ctx.k_factor for v in k]
 
     def set_piece(self, ctx: Piece, t0: float) -> None:
         """Install a piece and precompute what does not change inside it."""

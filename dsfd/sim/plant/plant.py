@@ -17,6 +17,7 @@ the units of their names.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -35,6 +36,7 @@ from dsfd.sim.plant.actuators import (
     validate_command,
 )
 from dsfd.sim.plant.config import PlantOptions, TrueParameters, drift_factors
+from dsfd.sim.plant.faults import FaultSpec, PlantFaults
 from dsfd.sim.plant.flow import NETWORK, PAIR, FlowPiece, reg_coefficients
 from dsfd.sim.plant.forcing import ForcingTables, station_ghi, weather_at
 from dsfd.sim.plant.initial import initial_state
@@ -88,12 +90,15 @@ class Plant:
     sensors : SensorConfig, optional
     room_schedule : callable or sequence of (unix_s, degC), optional
         Room air temperature; default constant ``cfg.room.t_in_c``.
+    faults : sequence of FaultSpec
+        Slow physical and sensor faults (:mod:`dsfd.sim.plant.faults`); relative starts
+        count from each :meth:`reset`.
     """
 
     def __init__(self, cfg: PanelConfig, options: PlantOptions | None = None, *, seed: int,
                  weather_series: WeatherSeries, params: TrueParameters | None = None,
-                 sensors: SensorConfig | None = None, room_schedule: RoomSchedule = None
-                 ) -> None:
+                 sensors: SensorConfig | None = None, room_schedule: RoomSchedule = None,
+                 faults: Sequence[FaultSpec] = ()) -> None:
         self.cfg = cfg
         self.options = options or PlantOptions()
         self.seed = seed
@@ -102,6 +107,8 @@ class Plant:
         self.series = at_site(weather_series, cfg)
         self.model = PlantModel(cfg, self.options, self.params)
         self.sensor_config = sensors or SensorConfig()
+        self.fault_specs = tuple(faults)
+        self.faults = PlantFaults(self.fault_specs, 0.0, step_deg=self._louver_step())
         #: Sensors with their seeded fixed biases (kept across resets).
         self.sensor_bank = SensorBank(self.sensor_config, rng_s,
                                       ideal=self.options.sensors == "ideal")
@@ -160,7 +167,11 @@ class Plant:
                                     self.model.phis)
         self._t0 = self._t = float(start_s)
         self._command = cmd
-        self.actuators.reset(cmd.phi_deg, self._targets(cmd), self._t)
+        self.faults = PlantFaults(self.fault_specs, self._t0, step_deg=self._louver_step())
+        self._onsets = [t for t in self.faults.onsets_s if t > self._t0]
+        self.sensor_bank.config = dataclasses.replace(
+            self.sensor_config, faults=self.sensor_config.faults + self.faults.sensor_faults())
+        self.actuators.reset(*self._true_targets(self._t), self._t)
         T = initial_state(self, cmd, x0)
         self._y = np.concatenate([T, np.zeros(N_ACC)])
         self._u0 = self.model.stored_energy(T)
@@ -179,6 +190,16 @@ class Plant:
     def _targets(self, cmd: Command) -> np.ndarray:
         return damper_mask(cmd.afr) * (cmd.or_pct / 100.0)
 
+    def _louver_step(self) -> float | None:
+        return None if self.cfg.louver is None else float(self.cfg.louver.step_deg)
+
+    def _true_targets(self, t: float) -> tuple[float, np.ndarray]:
+        """Where the command sends the louver and the dampers at ``t``, faults included
+        (a stuck blade, slipped slats); the read-back still reports the command."""
+        lv = self.cfg.louver
+        return self.faults.actuate(t, self._command.phi_deg, self._targets(self._command),
+                                   None if lv is None else lv.angles_deg())
+
     def apply(self, command: Command | Mapping) -> Command:
         """Validate and apply a command (raises :class:`~dsfd.sim.plant.actuators.CommandError`).
 
@@ -186,8 +207,8 @@ class Plant:
         """
         cmd = validate_command(self.cfg, command, or_quantum_pct=self._quantum)
         t = self.time_s
-        self.actuators.command(t, cmd.phi_deg, self._targets(cmd))
         self._command = cmd
+        self.actuators.command(t, *self._true_targets(t))
         self._jac_ok = False
         self._eval_t = None
         return cmd
@@ -205,9 +226,16 @@ class Plant:
             stop = min(t_end, self._t0 + (k + 1) * dt)
             if act.louver_moving(t):
                 stop = min(stop, act.louver_arrival_s())
+            if self._onsets:
+                stop = min(stop, self._onsets[0])
             self._integrate(k, t, stop)
             t = stop
             act.settle(t)
+            if self._onsets and t >= self._onsets[0] - 1e-9:
+                # an actuator fault begins: the blades and slats leave the commanded targets
+                self._onsets.pop(0)
+                act.command(t, *self._true_targets(t))
+                self._jac_ok = False
         self._t = t_end
         self._last_len = float(seconds)
         self._eval_t = None
@@ -216,32 +244,39 @@ class Plant:
         table, row = self.tables.step(k)
         act, opt = self.actuators, self.options
         fa = table.a[row]
-        target_open = damper_mask(self._command.afr) & (self.model.openings.area_m2 > 0)
+        target_open = (self.faults.open_mask(t, damper_mask(self._command.afr))
+                       & (self.model.openings.area_m2 > 0))
         y_now = act.dampers_at(t)
         active = tuple(int(i) for i in np.flatnonzero(
             (target_open | (y_now > DAMPER_SHUT)) & (self.model.openings.area_m2 > 0)))
         dp_t = self.model.dp_t
+        k_factor = self.faults.resistance_factor(t)
+        solar = self.faults.solar_factor(t)
         if len(active) == 2:
             a, b = active
             power = opt.diagonal_flow == "power_law" and set(active) in _DIAGONAL_PAIRS
             or_eff = max(min(y_now[a], y_now[b]), self.model.openings.floor)
             n = self.params.n
-            flow = FlowPiece(PAIR, a=a, b=b, power=power, power_coef=self.params.c * or_eff,
+            # resistance × r: Q = c (ΔP/r)^n, so the coefficient takes r^-n
+            coef = self.params.c * or_eff * k_factor ** -n
+            flow = FlowPiece(PAIR, a=a, b=b, power=power, power_coef=coef,
                              n=n, abcd_n=reg_coefficients(n), dp_t=dp_t)
         elif len(active) > 2:
             flow = FlowPiece(NETWORK, active=active, dp_t=dp_t)
         else:
             flow = FlowPiece(0)
         _, factors = drift_factors(opt, t - self._t0)
+        src_a = table.src_a[row] * solar
         return Piece(ts=self._t0 + k * self.tables.dt, inv_len=1.0 / self.tables.dt, fa=fa,
-                     fd=table.b[row] - fa, src_a=table.src_a[row],
-                     src_d=table.src_b[row] - table.src_a[row],
+                     fd=table.b[row] - fa, src_a=src_a,
+                     src_d=table.src_b[row] * solar - src_a,
                      windward=bool(table.windward[row]), act=act,
                      phi_moving=act.louver_moving(t),
                      dampers_moving=not act.dampers_settled(t),
                      target_open=target_open, flow=flow,
                      h_scale=np.asarray(self.params.h_multipliers) * factors,
-                     pc=getattr(self.model.ctx, "pc", 0.0) if self.model.ctx else 0.0)
+                     pc=getattr(self.model.ctx, "pc", 0.0) if self.model.ctx else 0.0,
+                     k_factor=k_factor)
 
     def _integrate(self, k: int, t0: float, t1: float) -> None:
         model = self.model

@@ -13,7 +13,10 @@ Error model (docs/model.md#plant-sensors), all seeded:
 
 Faults (for fault-handling tests), per sensor from a start time: ``dropout`` (NaN),
 ``stuck`` (the reading at the fault start, or a given value) and ``spikes`` (with a given
-probability per reading, ± a magnitude). Faults apply with ideal sensors too.
+probability per reading, ± a magnitude); and the slow ones of the diagnostics
+(docs/faults.md#simulated-faults): ``offset`` (the reading + a value), ``drift`` (+ a value
+per day since the start) and ``gain`` (the reading × a value). Faults apply with ideal
+sensors too.
 """
 
 from __future__ import annotations
@@ -27,6 +30,8 @@ import numpy as np
 SENSOR_NAMES = ("x1_c", "x2_c", "x3_c", "x4_c", "x5_c", "t_room_c", "v_cav_ms", "t_out_c",
                 "ghi_wm2", "wind_speed_ms", "wind_dir_deg", "pressure_hpa", "rh_pct")
 THERMOCOUPLES = ("x1_c", "x2_c", "x3_c", "x4_c", "x5_c", "t_room_c", "t_out_c")
+_SLOW = ("offset", "drift", "gain")
+_SECONDS_PER_DAY = 86400.0
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -37,13 +42,14 @@ class SensorFault:
     ----------
     sensor : str
         Canonical sensor name (one of :data:`SENSOR_NAMES`).
-    kind : {"dropout", "stuck", "spikes"}
+    kind : {"dropout", "stuck", "spikes", "offset", "drift", "gain"}
     start_s : float, [s]
         UTC unix time the fault begins.
     end_s : float, [s]
         When it ends (default never).
     value : float, optional
-        Stuck value; default the reading at the first faulty sample.
+        Stuck value (default the reading at the first faulty sample); the offset [unit],
+        drift [unit per day] or gain [-] of those kinds (required there).
     magnitude : float
         Spike size in the sensor's unit.
     probability : float
@@ -51,7 +57,7 @@ class SensorFault:
     """
 
     sensor: str
-    kind: Literal["dropout", "stuck", "spikes"]
+    kind: Literal["dropout", "stuck", "spikes", "offset", "drift", "gain"]
     start_s: float
     end_s: float = math.inf
     value: float | None = None
@@ -61,8 +67,10 @@ class SensorFault:
     def __post_init__(self) -> None:
         if self.sensor not in SENSOR_NAMES:
             raise ValueError(f"unknown sensor {self.sensor!r}; choose one of {SENSOR_NAMES}")
-        if self.kind not in ("dropout", "stuck", "spikes"):
+        if self.kind not in ("dropout", "stuck", "spikes", *_SLOW):
             raise ValueError(f"unknown fault kind {self.kind!r}")
+        if self.kind in _SLOW and self.value is None:
+            raise ValueError(f"a {self.kind} fault needs a value")
 
     def active(self, t: float) -> bool:
         return self.start_s <= t < self.end_s
@@ -161,7 +169,10 @@ class SensorBank:
                 self._stuck.pop(i, None)
                 continue
             name = fault.sensor
-            if fault.kind == "dropout":
+            if fault.kind in _SLOW:
+                if name in out:  # a station channel the panel lacks stays absent
+                    out[name] = _slow(fault, out[name], t)
+            elif fault.kind == "dropout":
                 out[name] = math.nan
             elif fault.kind == "stuck":
                 if i not in self._stuck:
@@ -170,3 +181,13 @@ class SensorBank:
             elif self.rng.uniform() < fault.probability:
                 out[name] += fault.magnitude * (1.0 if self.rng.uniform() < 0.5 else -1.0)
         return {name: float(out[name]) for name in SENSOR_NAMES if name in out}
+
+
+def _slow(fault: SensorFault, value: float, t: float) -> float:
+    """A reading under an offset, drift or gain fault (docs/faults.md#simulated-faults)."""
+    size = float(fault.value or 0.0)
+    if fault.kind == "offset":
+        return value + size
+    if fault.kind == "drift":
+        return value + size * (t - fault.start_s) / _SECONDS_PER_DAY
+    return value * size

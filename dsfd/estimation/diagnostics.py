@@ -1,0 +1,376 @@
+"""Change detectors on what the self-calibrating model leaves behind (docs/model.md#diagnostics).
+
+Pure functions (no files, clocks or logging): arrays in, a :class:`Finding` or None out.
+
+* :func:`residual_change` — the one-step prediction errors of one output (x1..x5 [K],
+  the cavity speed [m/s]), averaged in blocks, each block centred and scaled by the median
+  and robust spread (MAD) of the blocks at the same time of day on the previous days, then
+  a two-sided CUSUM (Page 1954) with allowance k and threshold h in those units.
+* :func:`parameter_change` — one calibrated parameter's history (e.g. one estimate a day)
+  with the calibration's posterior sd: each estimate's distance from the precision-weighted
+  mean of a trailing reference, in posterior sd, then the same CUSUM with an allowance of
+  1.5 sd, so that estimates wandering within their posterior sd never add up to a finding.
+
+The physical cross-checks are in :mod:`dsfd.estimation.crosschecks`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["Cusum", "Evidence", "Finding", "ParameterSettings", "ResidualSettings",
+           "cusum_confidence", "page_cusum", "parameter_change", "residual_change"]
+
+#: MAD → σ for normal data (Rousseeuw & Croux 1993).
+MAD_TO_SD = 1.4826
+SECONDS_PER_DAY = 86400.0
+
+
+@dataclass(frozen=True, kw_only=True)
+class Evidence:
+    """What a finding rests on.
+
+    Attributes
+    ----------
+    signal : str
+        The residual (``residual:x3_c``), parameter (``parameter:h_out``) or cross-check
+        (``crosscheck:v_cav_ms``) it was seen in.
+    shift : float
+        Size of the change in the signal's unit (mean after the start minus the reference).
+    shift_sd : float
+        The same in units of the reference spread (residuals) or posterior sd (parameters).
+    unit : str
+    since_s : float, [s]
+        When the change started (the last time the CUSUM statistic was zero).
+    statistic, threshold : float
+        The detector's statistic at the detection and the threshold it crossed [-].
+    """
+
+    signal: str
+    shift: float
+    shift_sd: float
+    unit: str
+    since_s: float
+    statistic: float
+    threshold: float
+
+
+@dataclass(frozen=True, kw_only=True)
+class Finding:
+    """Something the façade, a sensor or an actuator is doing that the model says is new.
+
+    Attributes
+    ----------
+    kind : str
+        What changed, e.g. ``residual_shift``, ``parameter_shift``, ``cavity_no_flow``.
+    confidence : float, [0, 1]
+        The statistic over twice its threshold, capped at 1 (0.5 at the threshold): a scale
+        of how far past the threshold the evidence is, not a probability.
+    start_s : float, [s]
+        Estimated start of the change.
+    detected_s : float, [s]
+        When the evidence crossed the threshold (the CUSUMs), or the last reading the
+        evidence rests on (the cavity cross-check, which judges a window).
+    evidence : tuple of Evidence
+    action : str
+        What a person should check; names every cause the evidence cannot separate.
+    """
+
+    kind: str
+    confidence: float
+    start_s: float
+    detected_s: float
+    evidence: tuple[Evidence, ...]
+    action: str
+
+
+@dataclass(frozen=True)
+class Cusum:
+    """Result of :func:`page_cusum` over standardised values ``z``.
+
+    ``alarm`` is the first index where a side exceeds ``h`` (None: no alarm), ``side`` +1
+    (upward shift) or −1, ``start`` the index after that side's last zero before the alarm
+    (the change-point estimate of Page's scheme), ``statistic`` the larger side per index.
+    """
+
+    alarm: int | None
+    side: int
+    start: int
+    statistic: np.ndarray
+
+
+def page_cusum(z: np.ndarray, *, k: float, h: float) -> Cusum:
+    """Two-sided CUSUM (Page 1954): S⁺ = max(0, S⁺ + z − k), S⁻ = max(0, S⁻ − z − k).
+
+    Non-finite ``z`` leave both sides unchanged. With independent standard normal z,
+    k = 0.75 and h = 8, the mean run to a false alarm of one side is about 8·10⁵ values
+    (Siegmund's approximation (e^{2kb} − 2kb − 1)/(2k²), b = h + 1.166, as given by
+    Basseville & Nikiforov 1993).
+    """
+    z = np.asarray(z, float)
+    s_pos = s_neg = 0.0
+    zero_pos = zero_neg = 0
+    stat = np.zeros(z.size)
+    for i, v in enumerate(z):
+        if math.isfinite(v):
+            s_pos = max(0.0, s_pos + v - k)
+            s_neg = max(0.0, s_neg - v - k)
+        # a missing value while a side is at zero moves that side's start past it
+        if s_pos == 0.0:
+            zero_pos = i + 1
+        if s_neg == 0.0:
+            zero_neg = i + 1
+        stat[i] = max(s_pos, s_neg)
+        if s_pos > h or s_neg > h:
+            up = s_pos >= s_neg
+            return Cusum(i, 1 if up else -1, zero_pos if up else zero_neg, stat[:i + 1])
+    return Cusum(None, 0, z.size, stat)
+
+
+def cusum_confidence(statistic: float, threshold: float) -> float:
+    """:attr:`Finding.confidence` of a CUSUM: statistic / (2 × threshold), at most 1."""
+    return float(min(1.0, statistic / (2.0 * threshold)))
+
+
+# ----------------------------------------------------------------------------- residuals
+@dataclass(frozen=True, kw_only=True)
+class ResidualSettings:
+    """Parameters of :func:`residual_change` (docs/model.md#diagnostics).
+
+    Attributes
+    ----------
+    block_s : float, [s]
+        Residuals are averaged over blocks this long (10 min): one-step errors of a
+        one-minute model are strongly correlated; block means are much less so.
+    period_blocks : int
+        Blocks in a day (144 of 10 min): the reference of a block is the same time of day.
+    reference_days : int
+        How many previous days at that time of day make the reference (5).
+    half_width_blocks : int
+        The reference takes this many blocks either side of the same time of day (3:
+        ±30 min), so 5 days give up to 35 blocks.
+    min_reference_blocks : int
+        Fewer blocks in the reference: no statistic for that block (15: three days).
+    guard_blocks : int
+        The scale comes from deviations that end this many blocks before the block tested
+        (36: six hours), so a change does not widen its own scale before it is found.
+    min_scale_blocks : int
+        Fewer deviations for the scale: no statistic (144: a day's worth).
+    min_block_samples : int
+        Blocks with fewer finite residuals are skipped.
+    k_sd, h_sd : float
+        CUSUM allowance and threshold in long-run spreads (0.75 and 8): a shift of two
+        spreads is found within about 7 blocks (a 1 K step on residuals of 0.3 K sd within
+        about two hours).
+    scale_floor : float
+        Least spread used [the residual's unit], so a quiet reference (a closed cavity at
+        night) does not turn sensor noise into findings.
+    """
+
+    block_s: float = 600.0
+    period_blocks: int = 144
+    reference_days: int = 5
+    half_width_blocks: int = 3
+    min_reference_blocks: int = 15
+    guard_blocks: int = 36
+    min_scale_blocks: int = 144
+    min_block_samples: int = 3
+    k_sd: float = 0.75
+    h_sd: float = 8.0
+    scale_floor: float = 0.05
+
+
+def block_means(times_s: np.ndarray, values: np.ndarray, *, block_s: float,
+                min_samples: int) -> tuple[np.ndarray, np.ndarray]:
+    """Block numbers (floor(t/block_s)) and means of the finite values in each block with
+    at least ``min_samples`` of them, in time order."""
+    t = np.asarray(times_s, float)
+    v = np.asarray(values, float)
+    ok = np.isfinite(t) & np.isfinite(v)
+    idx = np.floor(t[ok] / block_s).astype(np.int64)
+    if idx.size == 0:
+        return idx, np.zeros(0)
+    blocks, inverse, counts = np.unique(idx, return_inverse=True, return_counts=True)
+    sums = np.bincount(inverse, weights=v[ok])
+    keep = counts >= min_samples
+    return blocks[keep], sums[keep] / counts[keep]
+
+
+def residual_change(times_s: np.ndarray, residuals: np.ndarray, *, signal: str, unit: str,
+                    settings: ResidualSettings | None = None) -> Finding | None:
+    """The first change in one output's prediction errors, or None.
+
+    Parameters
+    ----------
+    times_s : array (n,), [s]
+        Times of the residuals (any order is not allowed: increasing).
+    residuals : array (n,)
+        Measured minus predicted (one step ahead), NaN where either is missing.
+    signal, unit : str
+        The output's name (``x3_c``) and unit, for the evidence.
+    settings : ResidualSettings, optional
+
+    Returns
+    -------
+    Finding or None
+        ``residual_shift`` with the block where the CUSUM crossed ``h_sd`` (``detected_s``:
+        that block's end) and the block after its last zero (``start_s``: that block's start).
+    """
+    st = settings or ResidualSettings()
+    blocks, means = block_means(times_s, residuals, block_s=st.block_s,
+                                min_samples=st.min_block_samples)
+    centre, scale = _same_time_reference(blocks, means, st)
+    z = (means - centre) / scale
+    cs = page_cusum(z, k=st.k_sd, h=st.h_sd)
+    if cs.alarm is None:
+        return None
+    after = slice(cs.start, cs.alarm + 1)
+    shift = float(np.nanmean(means[after] - centre[after]))
+    shift_sd = float(np.nanmean(z[after]))
+    start_s = float(blocks[cs.start] * st.block_s)
+    ev = Evidence(signal=f"residual:{signal}", shift=shift, shift_sd=shift_sd, unit=unit,
+                  since_s=start_s, statistic=float(cs.statistic[-1]), threshold=st.h_sd)
+    direction = "above" if cs.side > 0 else "below"
+    return Finding(kind="residual_shift", confidence=cusum_confidence(ev.statistic, st.h_sd),
+                   start_s=start_s, detected_s=float((blocks[cs.alarm] + 1) * st.block_s),
+                   evidence=(ev,), action=(
+                       f"{signal} reads {abs(shift):.3g} {unit} {direction} what the "
+                       f"calibrated model predicts: check the {signal} sensor, or what changed "
+                       "on the façade (the residual alone cannot tell which)"))
+
+
+def _same_time_reference(blocks: np.ndarray, means: np.ndarray, st: ResidualSettings
+                         ) -> tuple[np.ndarray, np.ndarray]:
+    """Each block's centre and scale (NaN where the history is too short).
+
+    Centre: the median of the blocks at the same time of day (± ``half_width_blocks``) on
+    the ``reference_days`` previous days. Scale: 1.4826 MAD (at least ``scale_floor``) of
+    the deviations from their own centres over the ``reference_days`` days that end
+    ``guard_blocks`` before the block: pooled over all times of day, so a few days give a
+    steady spread.
+    """
+    nan = np.full(means.size, np.nan)
+    if means.size == 0:
+        return nan, nan.copy()
+    dense = np.full(int(blocks[-1] - blocks[0]) + 1, np.nan)
+    pos = (blocks - blocks[0]).astype(np.int64)
+    dense[pos] = means
+    lags = np.array([j * st.period_blocks + d for j in range(1, st.reference_days + 1)
+                     for d in range(-st.half_width_blocks, st.half_width_blocks + 1)])
+    idx = pos[:, None] - lags[None, :]
+    ref = np.where(idx >= 0, dense[np.clip(idx, 0, None)], np.nan)
+    enough = np.count_nonzero(np.isfinite(ref), axis=1) >= st.min_reference_blocks
+    centre = nan.copy()
+    if np.any(enough):
+        centre[enough] = np.nanmedian(ref[enough], axis=1)
+    dev = np.full(dense.size, np.nan)
+    dev[pos] = means - centre
+    scale = nan.copy()
+    span = st.reference_days * st.period_blocks
+    for i, p in enumerate(pos):
+        if not enough[i]:
+            continue
+        window = dev[max(0, p - st.guard_blocks - span):max(0, p - st.guard_blocks)]
+        if np.count_nonzero(np.isfinite(window)) >= st.min_scale_blocks:
+            scale[i] = _long_run_sd(window, st.scale_floor)
+    return centre, scale
+
+
+def _long_run_sd(dev: np.ndarray, floor: float) -> float:
+    """Robust sd of the deviations (1.4826 MAD) × sqrt((1 + φ)/(1 − φ)), φ their lag-one
+    autocorrelation clipped to [0, 0.9] (NaN gaps break the pairs).
+
+    A sum of n AR(1)-like values has the variance of n independent ones times
+    (1 + φ)/(1 − φ); the CUSUM sums, so its units must be the long-run sd, or correlated
+    errors reach the threshold far sooner than independent ones (the variance of the mean
+    of an AR(1) process, Box, Jenkins & Reinsel; docs/model.md#diagnostics-residuals).
+    """
+    ok = dev[np.isfinite(dev)]
+    c = float(np.median(ok))
+    sd = max(MAD_TO_SD * float(np.median(np.abs(ok - c))), floor)
+    a, b = dev[:-1] - c, dev[1:] - c
+    pair = np.isfinite(a) & np.isfinite(b)
+    a, b = np.clip(a[pair], -3 * sd, 3 * sd), np.clip(b[pair], -3 * sd, 3 * sd)
+    denom = float(np.sqrt(np.sum(a * a) * np.sum(b * b)))
+    phi = float(np.clip(np.sum(a * b) / denom, 0.0, 0.9)) if denom > 0 else 0.0
+    return sd * float(np.sqrt((1.0 + phi) / (1.0 - phi)))
+
+
+# ---------------------------------------------------------------------------- parameters
+@dataclass(frozen=True, kw_only=True)
+class ParameterSettings:
+    """Parameters of :func:`parameter_change` (docs/model.md#diagnostics).
+
+    Attributes
+    ----------
+    reference_days, guard_days : float, [d]
+        The reference is the estimates from ``guard_days + reference_days`` to
+        ``guard_days`` before the one tested (7 and 2 days).
+    min_reference : int
+        Fewer estimates in the reference: no statistic.
+    k_sd, h_sd : float
+        CUSUM allowance and threshold in posterior sd (1.5 and 5): an estimate within
+        1.5 sd of the reference adds nothing; three days at 4 sd, or two at 4 sd and one at 1.5
+        sd beyond the allowance, are a finding.
+    """
+
+    reference_days: float = 7.0
+    guard_days: float = 2.0
+    min_reference: int = 3
+    k_sd: float = 1.5
+    h_sd: float = 5.0
+
+
+def parameter_change(times_s: np.ndarray, values: np.ndarray, sds: np.ndarray, *, name: str,
+                     unit: str = "", settings: ParameterSettings | None = None
+                     ) -> Finding | None:
+    """The first change of a calibrated parameter beyond its posterior sd, or None.
+
+    Parameters
+    ----------
+    times_s : array (n,), [s]
+        Times of the estimates, increasing (typically one a day).
+    values, sds : array (n,)
+        The estimates and their posterior sd in the same coordinates (for a positive
+        parameter the calibration's log coordinates make the sd relative).
+    name, unit : str
+        For the evidence.
+
+    Notes
+    -----
+    z_i = (θ_i − θ̄_ref) / sqrt(σ_i² + σ̄_ref²), θ̄_ref the precision-weighted mean of the
+    reference and σ̄_ref its standard error; two-sided CUSUM of z with ``k_sd``, ``h_sd``.
+    """
+    st = settings or ParameterSettings()
+    t = np.asarray(times_s, float)
+    v = np.asarray(values, float)
+    sd = np.asarray(sds, float)
+    z = np.full(v.size, np.nan)
+    ref_mean = np.full(v.size, np.nan)
+    ok = np.isfinite(v) & np.isfinite(sd) & (sd > 0)
+    for i in range(v.size):
+        if not ok[i]:
+            continue
+        sel = (ok & (t >= t[i] - (st.guard_days + st.reference_days) * SECONDS_PER_DAY)
+               & (t < t[i] - st.guard_days * SECONDS_PER_DAY))
+        if np.count_nonzero(sel) < st.min_reference:
+            continue
+        w = 1.0 / sd[sel] ** 2
+        ref_mean[i] = float(np.sum(w * v[sel]) / np.sum(w))
+        z[i] = (v[i] - ref_mean[i]) / math.sqrt(sd[i] ** 2 + 1.0 / float(np.sum(w)))
+    cs = page_cusum(z, k=st.k_sd, h=st.h_sd)
+    if cs.alarm is None:
+        return None
+    after = slice(cs.start, cs.alarm + 1)
+    ev = Evidence(signal=f"parameter:{name}", shift=float(np.nanmean(v[after] - ref_mean[after])),
+                  shift_sd=float(np.nanmean(z[after])), unit=unit, since_s=float(t[cs.start]),
+                  statistic=float(cs.statistic[-1]), threshold=st.h_sd)
+    direction = "risen" if cs.side > 0 else "fallen"
+    return Finding(kind="parameter_shift", confidence=cusum_confidence(ev.statistic, st.h_sd),
+                   start_s=ev.since_s, detected_s=float(t[cs.alarm]), evidence=(ev,),
+                   action=(f"the calibrated {name} has {direction} by {abs(ev.shift_sd):.1f} "
+                           "posterior sd: the façade changed (glass, screen, dampers) or the "
+                           "sensors the fit rests on did"))
