@@ -20,6 +20,7 @@ import numpy as np
 
 from dsfd.config.control import Control
 from dsfd.config.panel import PanelConfig
+from dsfd.control.comfort_horizon import block_any, comfort_note, limits_line
 from dsfd.control.horizon import (
     CLOSED,
     Best,
@@ -75,12 +76,21 @@ class MpcOptimiser:
         ctl: Control = self.cfg.control
         trace = [f"candidates: {len(self.angles)} louver positions x {len(self.regimes)} damper "
                  f"sets (regimes {list(self.regimes)}), OR grid {list(ctl.or_grid_pct)} %"]
-        screen_problem = dataclasses.replace(problem,
-                                             forcing=coarsen(problem.forcing, self.factor))
+        screen_problem = dataclasses.replace(
+            problem, forcing=coarsen(problem.forcing, self.factor),
+            occupied=None if problem.occupied is None else block_any(problem.occupied,
+                                                                     self.factor))
         full = HorizonEvaluator(self.cfg, self.model, self.optics, problem, self.angles,
                                 coupling_tol_k=ctl.coupling_tolerance_k)
-        screen = HorizonEvaluator(self.cfg, self.screen_model, self.optics, screen_problem,
-                                  self.angles, loads=coarsen_loads(full.loads, self.factor))
+        comfort = full.comfort
+        if comfort is not None:
+            assert problem.occupied is not None
+            trace.append(limits_line(comfort))
+        screen = HorizonEvaluator(
+            self.cfg, self.screen_model, self.optics, screen_problem, self.angles,
+            loads=coarsen_loads(full.loads, self.factor),
+            comfort=None if comfort is None else comfort.coarsened(self.factor,
+                                                                   screen_problem.forcing))
         screened = self._screen(screen)
         trace.append(f"stage 1: screened {screened.candidates.size} candidates at "
                      f"{self.screen_model.dt:g} s steps")
@@ -90,11 +100,15 @@ class MpcOptimiser:
         n_pairs = min(ctl.refine_max_pairs, len(self.angles) * len(self.open_regimes))
         trace.append(f"stage 2: {finalists.size} at full resolution ({n_best} finalists, "
                      f"OR brackets of {n_pairs} pairs), best {best.describe(self.angles)}")
-        best, batches = self._refine(full, evaluated, best)
+        best, batches, evaluated = self._refine(full, evaluated, best)
         trace.append(f"stage 3: {batches} batch(es) of louver neighbours and OR points, best "
                      f"{best.describe(self.angles)}" if batches else
                      "stage 3: not needed (the best's louver neighbours were evaluated)")
-        return best.decision(self.angles, method="mpc",
+        note = ""
+        if comfort is not None:
+            note = comfort_note(best, evaluated.cheapest(), self.angles)
+            trace.append(f"comfort: {note}")
+        return best.decision(self.angles, method="mpc", comfort=note,
                              rollouts=full.rollouts + screen.rollouts, trace=tuple(trace))
 
     def _screen(self, screen: HorizonEvaluator) -> Evaluated:
@@ -114,8 +128,14 @@ class MpcOptimiser:
         """Stage 2's one full-resolution batch: the best screened candidates, and OR brackets
         (:meth:`_or_brackets`); with the number of screened candidates among them."""
         ctl = self.cfg.control
-        cost, cand = screened.terms.cost_j, screened.candidates
+        # Under comfort limits the ranking cost is +inf where a candidate breaks them: the
+        # stages below then search among the candidates a decision may take.
+        cost, cand = screened.rank_cost(), screened.candidates
         best = _best_screened(cost, cand.regime, ctl.full_candidates, ctl.finalist_margin_pct)
+        if screened.excess.any():
+            # and what energy alone would choose, for the trace's "what bound it"
+            best = np.union1d(best, np.argsort(screened.terms.cost_j, kind="stable")[
+                : ctl.full_candidates])
         # The all-open set at every coarse OR at the screened best louver position: its
         # flows can switch pattern twice within the horizon at one-minute steps, which the
         # coarse step cannot represent (Q_air of the other sign, cost 25 % off, seen) — a
@@ -154,10 +174,11 @@ class MpcOptimiser:
         return brackets.join(neighbours)
 
     def _refine(self, full: HorizonEvaluator, evaluated: Evaluated,
-                best: Best) -> tuple[Best, int]:
+                best: Best) -> tuple[Best, int, Evaluated]:
         """Stage 3: the louver positions next to the best (the screening can misrank
         neighbouring angles by a tenth of a per cent) and parabolic refinement of the best
-        pair's OR, one batch per round. Returns the best and the number of batches."""
+        pair's OR, one batch per round. Returns the best, the number of batches and every
+        full-resolution candidate."""
         ctl = self.cfg.control
         new = _louver_neighbours(best, len(self.angles), ctl.louver_neighbours,
                                  evaluated.candidates)
@@ -179,7 +200,7 @@ class MpcOptimiser:
             best = best.better(batch.best())
             evaluated = evaluated.join(batch)
             new = Candidates.empty()  # neighbours: once
-        return best, batches
+        return best, batches, evaluated
 
 
 def _around(idx: int, n_angles: int, reach: int) -> np.ndarray:

@@ -144,9 +144,11 @@ class Controller:
         mark = time.perf_counter()
         objective, objective_by = self.manual.objective_mode
         heating, forecast = self._outlook(weather, objective, now_s)
+        occupancy = self._occupancy_profile(now_s, self.cfg.control.horizon_steps)
         if hold is None:
             decision, method, fallback, no_decision = await self._decide(
-                weather, estimate, current, checked, forecast, heating=bool(heating))
+                weather, estimate, current, checked, forecast, heating=bool(heating),
+                occupancy=occupancy)
         else:  # a person has the panel: nothing to optimise
             decision, method, fallback, no_decision = None, "manual", "", ""
         t["decide"] = _ms(mark)
@@ -172,7 +174,8 @@ class Controller:
         horizon_x = self._horizon_end(estimate, forecast, applied)
         t["predict"] = _ms(mark)
         mark = time.perf_counter()
-        comfort = self._comfort(estimate, forecast, safe.command, now_s)
+        comfort = self._comfort(estimate, forecast, safe.command, bool(occupancy[0]),
+                                decision)
         t["comfort"] = _ms(mark)
 
         outcome = CycleOutcome(
@@ -274,10 +277,20 @@ class Controller:
             log.info("calibration update skipped: %s", outcome.skipped)
         return outcome
 
+    def _occupancy_profile(self, now_s: float, steps: int) -> np.ndarray:
+        """Whether the room is occupied at the start of each of the next ``steps`` model
+        steps from ``now_s``: the one place the decision learns about occupancy
+        (docs/model.md#comfort-constraints); today the weekly schedule alone."""
+        times_s = now_s + self.cfg.model.step_s * np.arange(max(steps, 1))
+        return occupied(times_s, occupancy=self.cfg.occupancy,
+                        utc_offset_h=self.cfg.site.utc_offset_h)
+
     async def _decide(self, weather: CycleWeather, estimate: StateEstimate,
                       current: Command | None, checked: Sample, forecast: Forcing | None, *,
-                      heating: bool) -> tuple[Decision | None, str, str, str]:
-        """(decision, method, fallback reason, why no decision at all)."""
+                      heating: bool, occupancy: np.ndarray
+                      ) -> tuple[Decision | None, str, str, str]:
+        """(decision, method, fallback reason, why no decision at all); ``occupancy`` per
+        horizon step (:meth:`_occupancy_profile`)."""
         if weather.inputs is None or weather.forcing is None or forecast is None:
             why = "required weather not GOOD: " + ", ".join(
                 f"{n} ({checked.quality(n).value})" for n in weather.missing)
@@ -294,7 +307,8 @@ class Controller:
                     heat_offsets_wm2=self.calibration.offsets,
                     previous_phi_deg=None if current is None else current.phi_deg,
                     previous_afr=None if current is None else current.afr,
-                    previous_or_pct=None if current is None else current.or_pct)
+                    previous_or_pct=None if current is None else current.or_pct,
+                    occupied=occupancy)
                 decision, why = await self.optimise_job.run(
                     self._optimiser(problem), budget_s=self.cfg.control.time_budget_s)
                 if decision is not None and _command_or_none(decision) is not None:
@@ -307,7 +321,7 @@ class Controller:
             self.cfg, heating=heating, t5_c=t5, t_in_c=weather.t_room_c,
             t_out_c=float(weather.inputs.t_out_k[0]) - T_ZERO,
             beam_wm2=float(forcing.beam_wm2[0]), profile_deg=float(forcing.profile_deg[0]),
-            previous_afr=None if current is None else current.afr)
+            previous_afr=None if current is None else current.afr, occupied=bool(occupancy[0]))
         if fallback:
             log.info("fallback to the baseline: %s", fallback)
         return decision, "rule", fallback, ""
@@ -330,19 +344,23 @@ class Controller:
             return None
 
     def _comfort(self, estimate: StateEstimate, forecast: Forcing | None, command: Command,
-                 now_s: float) -> ComfortCheck | None:
-        """The comfort limits ``command`` would break (docs/model.md#comfort), for the trace:
-        the pane and the supply air taken as the estimated x3 and cavity air x5 now."""
+                 is_occupied: bool, decision: Decision | None) -> ComfortCheck | None:
+        """The comfort of the command sent and what bound its choice (docs/model.md#comfort-
+        trace): the pane and the supply air taken as the estimated x3 and cavity air x5 now."""
         if forecast is None or not estimate.usable:
             return None
-        is_occupied = bool(occupied(now_s, occupancy=self.cfg.occupancy,
-                                    utc_offset_h=self.cfg.site.utc_offset_h))
+        bound = ""
+        if decision is not None and decision.comfort:
+            sent = _command_or_none(decision) == command
+            bound = decision.comfort if sent else (
+                f"{decision.comfort} (then the safety pipeline changed the command)")
         try:
             return comfort_check(self.cfg, self.optics, forecast, phi_deg=command.phi_deg,
                                  afr=command.afr, or_pct=command.or_pct,
                                  occupied=is_occupied,
                                  t_pane_c=float(estimate.x_k[2]) - T_ZERO,
-                                 t_supply_c=float(estimate.x_k[4]) - T_ZERO)
+                                 t_supply_c=float(estimate.x_k[4]) - T_ZERO)._replace(
+                                     bound=bound)
         except (ValueError, ArithmeticError):
             log.exception("comfort check failed")
             return None

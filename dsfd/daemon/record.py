@@ -30,7 +30,7 @@ def cycle_record(out: CycleOutcome, weather: CycleWeather, calibration: Calibrat
         trace = [{"stage": f"decide:{proposed.method}", "set": {
             "phi_deg": proposed.phi_deg, "afr": proposed.afr, "or_pct": proposed.or_pct},
             "why": " | ".join(proposed.trace)}, *trace]
-    if out.comfort is not None:  # informative: the decision did not weigh it
+    if out.comfort is not None:  # the command's comfort and what bound its choice
         trace.append({"stage": "comfort", "set": {}, "why": out.comfort.describe()})
     if weather.notes:
         trace.append({"stage": "inputs", "set": {}, "why": "; ".join(weather.notes)})
