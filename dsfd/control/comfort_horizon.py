@@ -172,4 +172,4 @@ def comfort_note(best: Best, cheapest: Best, angles_deg: np.ndarray) -> str:
     if not moves:
         return "every limit met; none bound the choice (energy alone chooses the same)"
     bound = [name for name, e in zip(LIMIT_NAMES, cheapest.excess, strict=True) if e > 0.0]
-    return f"{' and '.join(bound)} bound the choice: {', '.join(moves)}{price}"
+    return f"{', '.join(bound)} bound the choice: {', '.join(moves)}{price}"
