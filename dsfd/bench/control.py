@@ -4,11 +4,14 @@ Over random states and weathers (:func:`dsfd.sim.control_cases.random_problems`)
 of one MPC decision and of one paper-SQP decision, the MPC's gap to brute force on the full
 grid (OR in 1 % steps), and how often and by how much the paper's approach lands worse —
 both against the MPC and through its own louver rounding. Gaps are relative to
-max(|J_ref|, 1 Wh) so that near-zero costs do not blow the ratio up.
+max(|J_ref|, 1 Wh) so that near-zero costs do not blow the ratio up. The same problems with
+every horizon step occupied time the MPC under the comfort limits
+(docs/model.md#comfort-constraints) and count the decisions comfort changed.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 import time
 from pathlib import Path
@@ -34,11 +37,17 @@ def bench_control(panel: Path | None = None, *, cases: int = 200, seed: int = 0,
     mpc = MpcOptimiser(cfg)
     problems = random_problems(cfg, cases, seed=seed)
     t_mpc, t_sqp, gaps, sqp_vs_mpc, rounding = [], [], [], [], []
+    t_occ, changed = [], 0
     mpc.decide(problems[0])  # warm the optics caches
     for i, p in enumerate(problems):
         t0 = time.perf_counter()
         d = mpc.decide(p)
         t_mpc.append(time.perf_counter() - t0)
+        occupied = dataclasses.replace(p, occupied=np.ones(p.forcing.time_s.shape, bool))
+        t0 = time.perf_counter()
+        c = mpc.decide(occupied)
+        t_occ.append(time.perf_counter() - t0)
+        changed += (c.phi_deg, c.afr, c.or_pct) != (d.phi_deg, d.afr, d.or_pct)
         t0 = time.perf_counter()
         q = optimise_paper_sqp(cfg, mpc.model, mpc.optics, p)
         t_sqp.append(time.perf_counter() - t0)
@@ -58,6 +67,9 @@ def bench_control(panel: Path | None = None, *, cases: int = 200, seed: int = 0,
         "solve_ms_median": float(np.median(t_mpc_a)),
         "solve_ms_p99": float(np.percentile(t_mpc_a, 99)),
         "solve_ms_max": float(t_mpc_a.max()),
+        "occupied_solve_ms_median": float(np.median(t_occ) * 1e3),
+        "occupied_solve_ms_p99": float(np.percentile(t_occ, 99) * 1e3),
+        "occupied_changed_share": changed / cases,
         "sqp_solve_ms_median": float(np.median(t_sqp_a)),
         "speedup_vs_sqp_median": float(np.median(t_sqp_a) / np.median(t_mpc_a)),
         "gap_vs_bruteforce_pct_max": float(np.max(gaps)),
