@@ -21,6 +21,7 @@ from dsfd.control.comfort import comfort_check
 from dsfd.control.comfort_horizon import LIMIT_NAMES, VIOLATION_BAND
 from dsfd.control.horizon import Candidates, HorizonEvaluator
 from dsfd.control.optimiser import ControlProblem, MpcOptimiser
+from dsfd.control.paper_sqp import optimise_paper_sqp
 from dsfd.physics.constants import T_ZERO
 from dsfd.physics.forcing import step_inputs
 from dsfd.sim.openloop import first_step
@@ -144,3 +145,15 @@ def test_least_violation_when_no_candidate_meets_the_limits(suwon, mpc):
     # here |Δt_pr| − 10 K over 10 K, the same order at every step.
     asym = ev.excess[:, LIMIT_NAMES.index("radiant asymmetry")]
     assert np.all((asym > 0.0) & (asym < 1.0))
+
+
+def test_the_papers_sqp_takes_the_limits_as_a_penalty(suwon, mpc):
+    problem = _problem(mpc, NOON_S)
+    free = optimise_paper_sqp(suwon, mpc.model, mpc.optics, problem)
+    bound = optimise_paper_sqp(suwon, mpc.model, mpc.optics, _occupied(problem))
+    assert free.comfort == "" and _sun_passes(suwon, free.phi_deg, 30.0) > 0.1
+    # (from the paper's start, SLSQP finds the feasible side at noon; on a flat, piecewise
+    # constant objective it need not, and then says so: "the rounded control still violates")
+    assert bound.comfort.endswith("every limit met")
+    for profile in problem.forcing.profile_deg:
+        assert _sun_passes(suwon, bound.phi_deg, float(profile)) == 0.0
