@@ -32,8 +32,9 @@ if TYPE_CHECKING:
     from dsfd.physics.forcing import FacadeOptics, Forcing
     from dsfd.physics.model import Trajectory
 
-__all__ = ["INFLOW_MIN_KGS", "LIMIT_NAMES", "VIOLATION_BAND", "HorizonComfort",
-           "acceptable", "block_any", "comfort_note", "limits_line"]
+__all__ = ["INFLOW_MIN_KGS", "LEAST_VIOLATION", "LIMIT_NAMES", "VIOLATION_BAND",
+           "HorizonComfort", "acceptable", "block_any", "comfort_note", "equally_violating",
+           "limits_line"]
 
 #: The limits in the order of the excess columns, as the trace names them.
 LIMIT_NAMES = ("direct sun cut-off", "glare (DGPs)", "draught (supply air)",
@@ -47,16 +48,31 @@ _DIRECT_SUN_SCALE_MIN_WM2 = 1.0
 #: 34 °C − limit, never by less than this [K] (a limit at or above 34 °C).
 _DRAUGHT_SCALE_MIN_K = 1.0
 _T_NO_DRAUGHT_C = 34.0
-#: Candidates within this relative band of the least violation count as equally violating,
-#: and the cheapest of them is taken (docs/model.md#comfort-constraints).
+#: When no candidate meets every limit, those within this much normalised violation of the
+#: least count as equally violating, and the cheapest of them is taken: one limit exceeded by
+#: 1 % of itself over the whole horizon (docs/model.md#comfort-constraints). Absolute, so that
+#: a violation no candidate can change (the sun through a panel without a louver) does not
+#: widen it.
 VIOLATION_BAND = 0.01
+#: How the trace starts a least-violation note.
+LEAST_VIOLATION = "no candidate meets every limit"
+
+
+def equally_violating(v_a: float, v_b: float) -> bool:
+    """Whether two violations count as the same (:data:`VIOLATION_BAND`; zero only
+    matches zero)."""
+    lo, hi = sorted((v_a, v_b))
+    return hi == 0.0 if lo == 0.0 else hi - lo <= VIOLATION_BAND
 
 
 def acceptable(violation: np.ndarray) -> np.ndarray:
     """The candidates a decision may take: those meeting every limit, or when none does,
     those within :data:`VIOLATION_BAND` of the least violation."""
     v = np.asarray(violation, float)
-    return v <= (1.0 + VIOLATION_BAND) * float(v.min()) if v.size else np.zeros(0, bool)
+    if not v.size:
+        return np.zeros(0, bool)
+    least = float(v.min())
+    return v == 0.0 if least == 0.0 else v <= least + VIOLATION_BAND
 
 
 def block_any(mask: np.ndarray, factor: int) -> np.ndarray:
@@ -166,7 +182,7 @@ def comfort_note(best: Best, cheapest: Best, angles_deg: np.ndarray) -> str:
     price = (f"; comfort costs {(best.cost - cheapest.cost) / 3600.0:+.2f} Wh"
              if moves else "")
     if best.violation > 0.0:
-        head = (f"no candidate meets every limit: least violation {best.violation:.3g} "
+        head = (f"{LEAST_VIOLATION}: least violation {best.violation:.3g} "
                 f"({', '.join(_broken(best.excess))})")
         return head + (f", by {', '.join(moves)}{price}" if moves else "")
     if not moves:

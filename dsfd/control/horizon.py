@@ -16,7 +16,12 @@ from typing import NamedTuple
 import numpy as np
 
 from dsfd.config.panel import REGIME_OPENINGS, PanelConfig
-from dsfd.control.comfort_horizon import LIMIT_NAMES, VIOLATION_BAND, HorizonComfort, acceptable
+from dsfd.control.comfort_horizon import (
+    LIMIT_NAMES,
+    HorizonComfort,
+    acceptable,
+    equally_violating,
+)
 from dsfd.control.objective import CostTerms, horizon_cost, louver_move_penalty
 from dsfd.estimation.params import with_offsets
 from dsfd.physics.coupling import StepInputs
@@ -295,8 +300,7 @@ class Best:
     def better(self, other: Best) -> Best:
         """The better of two: the cheaper where both are acceptable next to each other
         (:func:`acceptable`), else the less violating."""
-        lo, hi = sorted((self.violation, other.violation))
-        if hi <= (1.0 + VIOLATION_BAND) * lo:
+        if equally_violating(self.violation, other.violation):
             return other if other.cost < self.cost else self
         return other if other.violation < self.violation else self
 

@@ -43,6 +43,7 @@ from dsfd.config.control import Control
 from dsfd.config.panel import PanelConfig
 from dsfd.control.baseline import rule_decision
 from dsfd.control.comfort import ComfortCheck, comfort_check
+from dsfd.control.comfort_horizon import LEAST_VIOLATION
 from dsfd.control.objective import is_heating
 from dsfd.control.occupancy import occupied
 from dsfd.control.optimiser import ControlProblem, Decision, MpcOptimiser
@@ -312,6 +313,8 @@ class Controller:
                 decision, why = await self.optimise_job.run(
                     self._optimiser(problem), budget_s=self.cfg.control.time_budget_s)
                 if decision is not None and _command_or_none(decision) is not None:
+                    if decision.comfort.startswith(LEAST_VIOLATION):
+                        log.info("comfort: %s", decision.comfort)
                     return decision, decision.method, "", ""
                 fallback = why or f"optimiser returned an invalid command {decision}"
         t5 = estimate.celsius(4) if estimate.age_cycles[4] <= \

@@ -140,7 +140,7 @@ def test_least_violation_when_no_candidate_meets_the_limits(suwon, mpc):
     ev = HorizonEvaluator(suwon, mpc.model, mpc.optics, problem, mpc.angles).evaluate_all(grid)
     assert np.all(ev.violation > 0.0)
     chosen = float(d.comfort.split("least violation ")[1].split(" ")[0])
-    assert chosen <= (1.0 + VIOLATION_BAND) * ev.violation.min() * (1.0 + 1e-2)
+    assert chosen <= (ev.violation.min() + VIOLATION_BAND) * (1.0 + 5e-3)  # (3 digits)
     # The asymmetry excess is the relative excess of the limit averaged over the horizon:
     # here |Δt_pr| − 10 K over 10 K, the same order at every step.
     asym = ev.excess[:, LIMIT_NAMES.index("radiant asymmetry")]
