@@ -348,8 +348,8 @@ class Controller:
 
     def _comfort(self, estimate: StateEstimate, forecast: Forcing | None, command: Command,
                  is_occupied: bool, decision: Decision | None) -> ComfortCheck | None:
-        """The comfort of the command sent and what bound its choice (docs/model.md#comfort-
-        trace): the pane and the supply air taken as the estimated x3 and cavity air x5 now."""
+        """The comfort of the command sent and what bound its choice, for the trace
+        (docs/model.md#comfort-trace): pane and supply air are the estimated x3 and x5 now."""
         if forecast is None or not estimate.usable:
             return None
         bound = ""
