@@ -1,4 +1,5 @@
-"""The real ``dsfd run`` weighs comfort while occupied, and decides as before when not.
+"""The real ``dsfd run`` weighs comfort while occupied (MPC and rule), and decides as before when
+not.
 
 A simulated winter morning (08:30 local, Suwon, low sun on the south façade) twice: without
 an ``occupancy:`` section (never occupied) and with one that marks every day occupied. The
@@ -70,3 +71,18 @@ def test_comfort_binds_the_decision_only_while_occupied(tmp_path: Path) -> None:
             assert "would violate" not in why, why
         if afr in (1, 2, 7, 8, 9) and or_pct > 0:
             assert float(why.split("supply air ")[1].split(" °C")[0]) >= 30.0, why
+
+
+def test_the_rule_baseline_cuts_off_the_sun_while_occupied(tmp_path: Path) -> None:
+    """``control.optimiser: rule`` with the schedule: the rule's sun-tracking cut-off moves the
+    louver out of the low morning sun that its energy rule (slats along the rays) lets in."""
+    rule = {"control": {"optimiser": "rule"}}
+    free = _run(tmp_path / "free", rule)
+    busy = _run(tmp_path / "busy", {**OCCUPIED, **rule})
+    for (phi_free, *_, trace_free), (phi_busy, *_, trace_busy) in zip(free, busy, strict=True):
+        sun_free = float(_stage(trace_free, "comfort").split("direct sun ")[1].split(" W")[0])
+        assert sun_free > 5.0 and "cut-off" not in _stage(trace_free, "decide:rule")
+        assert "cut-off" in _stage(trace_busy, "decide:rule")
+        why = _stage(trace_busy, "comfort")
+        assert why.startswith("occupied; direct sun 0 W/m2") and "cut-off" in why, why
+        assert phi_busy != phi_free
