@@ -32,13 +32,18 @@ if TYPE_CHECKING:
     from dsfd.physics.forcing import FacadeOptics, Forcing
     from dsfd.physics.model import Trajectory
 
-__all__ = ["INFLOW_MIN_KGS", "LEAST_VIOLATION", "LIMIT_NAMES", "VIOLATION_BAND",
+__all__ = ["INFLOW_MIN_KGS", "LEAST_VIOLATION", "LIMIT_NAMES", "THERMAL_LIMITS",
+           "VIOLATION_BAND", "VISUAL_LIMITS",
            "HorizonComfort", "acceptable", "block_any", "comfort_note", "equally_violating",
            "limits_line"]
 
 #: The limits in the order of the excess columns, as the trace names them.
 LIMIT_NAMES = ("direct sun cut-off", "glare (DGPs)", "draught (supply air)",
                "radiant asymmetry")
+#: The columns of the limits that depend on the louver position and the forcing alone, and
+#: of those that depend on the rollout.
+VISUAL_LIMITS = slice(0, 2)
+THERMAL_LIMITS = slice(2, 4)
 #: Cavity air entering the room below this rate [kg/s] (≈ 0.3 m³/h) is no supply: the flow
 #: laws' regularisation leaves such rates where the dampers are all but shut.
 INFLOW_MIN_KGS = 1e-4

@@ -163,12 +163,14 @@ class Evaluated:
         """Normalised comfort violation per candidate (docs/model.md#comfort-constraints)."""
         return self.excess.sum(axis=1)
 
-    def rank_cost(self) -> np.ndarray:
+    def rank_cost(self, limits: slice = slice(None)) -> np.ndarray:
         """The cost of the candidates a decision may take (:func:`acceptable`), +inf for the
-        others: ranking by it is ranking by cost under the comfort constraints."""
-        if not self.excess.any():
+        others: ranking by it is ranking by cost under the comfort constraints (``limits``:
+        only those columns of :data:`LIMIT_NAMES`)."""
+        excess = self.excess[:, limits]
+        if not excess.any():
             return self.terms.cost_j
-        return np.where(acceptable(self.violation), self.terms.cost_j, np.inf)
+        return np.where(acceptable(excess.sum(axis=1)), self.terms.cost_j, np.inf)
 
     def best(self) -> Best:
         """The cheapest acceptable (the first of equal costs)."""

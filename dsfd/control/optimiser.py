@@ -20,7 +20,12 @@ import numpy as np
 
 from dsfd.config.control import Control
 from dsfd.config.panel import PanelConfig
-from dsfd.control.comfort_horizon import block_any, comfort_note, limits_line
+from dsfd.control.comfort_horizon import (
+    VISUAL_LIMITS,
+    block_any,
+    comfort_note,
+    limits_line,
+)
 from dsfd.control.horizon import (
     CLOSED,
     Best,
@@ -42,6 +47,9 @@ from dsfd.physics.regimes import ALL_OPEN
 # re-exported here, where the daemon and the public API have always found them.
 __all__ = ["CLOSED", "ControlProblem", "Decision", "HorizonEvaluator", "MpcOptimiser",
            "distinct_regimes", "optimise"]
+
+#: Openings tried at full resolution for the best pair when comfort binds (:func:`_or_ladder`).
+OR_LADDER = np.array([0.05, 0.1, 0.2, 0.35, 0.5, 0.7, 0.85])
 
 
 class MpcOptimiser:
@@ -133,9 +141,15 @@ class MpcOptimiser:
         cost, cand = screened.rank_cost(), screened.candidates
         best = _best_screened(cost, cand.regime, ctl.full_candidates, ctl.finalist_margin_pct)
         if screened.excess.any():
-            # and what energy alone would choose, for the trace's "what bound it"
-            best = np.union1d(best, np.argsort(screened.terms.cost_j, kind="stable")[
-                : ctl.full_candidates])
+            # The coarse step can misjudge the thermal limits (a flow it shows reversed into
+            # the room with cold air while one-minute steps show exhaust: a damper set
+            # screened infeasible that is the best at full resolution, seen); the visual
+            # limits depend on the louver alone. So also the finalists under the visual
+            # limits only, and what energy alone would choose (the trace's "what bound it").
+            visual = _best_screened(screened.rank_cost(VISUAL_LIMITS), cand.regime,
+                                    ctl.full_candidates, ctl.finalist_margin_pct)
+            alone = np.argsort(screened.terms.cost_j, kind="stable")[: ctl.full_candidates]
+            best = np.union1d(best, np.union1d(visual, alone))
         # The all-open set at every coarse OR at the screened best louver position: its
         # flows can switch pattern twice within the horizon at one-minute steps, which the
         # coarse step cannot represent (Q_air of the other sign, cost 25 % off, seen) — a
@@ -182,6 +196,8 @@ class MpcOptimiser:
         ctl = self.cfg.control
         new = _louver_neighbours(best, len(self.angles), ctl.louver_neighbours,
                                  evaluated.candidates)
+        if best.regime != CLOSED and not best.same_controls(evaluated.cheapest()):
+            new = new.join(_or_ladder(best, evaluated.candidates))  # comfort binds
         batches = 0
         for round_ in range(max(1, ctl.or_refine_rounds)):
             cand, cost = evaluated.candidates, evaluated.terms.cost_j
@@ -207,6 +223,20 @@ def _around(idx: int, n_angles: int, reach: int) -> np.ndarray:
     """Louver indices within ``reach`` steps of ``idx`` (itself excluded)."""
     out = np.arange(idx - reach, idx + reach + 1)
     return out[(out >= 0) & (out < n_angles) & (out != idx)]
+
+
+def _or_ladder(best: Best, evaluated: Candidates) -> Candidates:
+    """The openings of :data:`OR_LADDER` not yet evaluated for the best pair, when comfort
+    binds (the best is not the cheapest). The coarse OR grid and its bracket suffice for
+    energy alone (its best opening was never interior in 600 cases), not for the pairs
+    comfort leaves: behind a cut-off louver the all-open set had its best opening at 5 %
+    (27 % of the cost missed, seen), and the screening can misjudge which set is feasible,
+    so the full-resolution best may be a pair it never bracketed; a thermal limit also ends
+    the opening's range at the largest flow that keeps the supply air warm enough."""
+    seen = (evaluated.angle_idx == best.angle_idx) & (evaluated.regime == best.regime)
+    points = OR_LADDER[~np.isin(OR_LADDER, evaluated.or_[seen])]
+    return Candidates(np.full(points.size, best.angle_idx), np.full(points.size, best.regime),
+                      points)
 
 
 def _louver_neighbours(best: Best, n_angles: int, reach: int,
