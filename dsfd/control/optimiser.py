@@ -196,7 +196,8 @@ class MpcOptimiser:
         ctl = self.cfg.control
         new = _louver_neighbours(best, len(self.angles), ctl.louver_neighbours,
                                  evaluated.candidates)
-        if best.regime != CLOSED and not best.same_controls(evaluated.cheapest()):
+        if (evaluated.excess.any() and best.regime != CLOSED
+                and not best.same_controls(evaluated.cheapest())):
             new = new.join(_or_ladder(best, evaluated.candidates))  # comfort binds
         batches = 0
         for round_ in range(max(1, ctl.or_refine_rounds)):
