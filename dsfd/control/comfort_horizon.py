@@ -17,6 +17,7 @@ rollouts are given.
 
 from __future__ import annotations
 
+import copy
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -128,8 +129,7 @@ class HorizonComfort:
         """The same limits on a screening pass's coarse steps (``forcing`` its block means):
         a coarse step is occupied if any of its steps is, and sees the worst direct sun and
         glare of its steps (the screening must not admit what the full resolution rejects)."""
-        out = object.__new__(HorizonComfort)
-        out.__dict__.update(self.__dict__)
+        out = copy.copy(self)
         starts = np.arange(0, self.occupied.size, factor)
         out.occupied = block_any(self.occupied, factor)
         out.direct_sun_wm2 = np.maximum.reduceat(self.direct_sun_wm2, starts, axis=1)
