@@ -19,6 +19,8 @@ from dsfd.sim.openloop import first_step
 from dsfd.sim.replay import at_site, load_weather, step_window, weather_inputs
 
 COOLING_SHIFT_K = 24.0
+#: Beam on the façade [W/m2] above which a window counts as sunny.
+SUNNY_BEAM_WM2 = 30.0
 
 
 def day_forcing(cfg: PanelConfig, weather: str = "rmis-golden-2022-01") -> Forcing:
@@ -29,8 +31,9 @@ def day_forcing(cfg: PanelConfig, weather: str = "rmis-golden-2022-01") -> Forci
 
 
 def random_problems(cfg: PanelConfig, n: int, *, seed: int = 0, cooling_share: float = 0.3,
-                    horizon: int | None = None) -> list[ControlProblem]:
-    """``n`` random decision problems (see module docstring)."""
+                    horizon: int | None = None, sunny: bool = False) -> list[ControlProblem]:
+    """``n`` random decision problems (see module docstring); ``sunny``: only windows that
+    start with more than :data:`SUNNY_BEAM_WM2` of beam on the façade."""
     rng = np.random.default_rng(seed)
     horizon = horizon or cfg.control.horizon_steps
     full = day_forcing(cfg)
@@ -40,9 +43,12 @@ def random_problems(cfg: PanelConfig, n: int, *, seed: int = 0, cooling_share: f
     default = model.default_theta()
     angles = cfg.louver.angles_deg() if cfg.louver is not None else (0.0,)
     regimes = cfg.openings.available_regimes()
+    starts = np.arange(full.time_s.shape[0] - horizon)
+    if sunny:
+        starts = starts[full.beam_wm2[starts] > SUNNY_BEAM_WM2]
     out = []
     for _ in range(n):
-        k = int(rng.integers(0, full.time_s.shape[0] - horizon))
+        k = int(starts[rng.integers(0, starts.size)])
         win = full.window(k, k + horizon)
         if rng.random() < cooling_share:
             shift = COOLING_SHIFT_K

@@ -13,6 +13,7 @@ from dsfd.config.panel import PanelConfig
 from dsfd.control.horizon import (
     CLOSED,
     Best,
+    Candidates,
     ControlProblem,
     Decision,
     HorizonEvaluator,
@@ -40,8 +41,7 @@ def brute_force(cfg: PanelConfig, model: LumpedModel, optics: FacadeOptics,
     best: Best | None = None
     for start in range(0, a.size, batch):
         sl = slice(start, start + batch)
-        terms, labels = ev.evaluate(a[sl], r[sl], o[sl])
-        found = Best.of(terms, labels, a[sl], r[sl], o[sl])
+        found = ev.evaluate_all(Candidates(a[sl], r[sl], o[sl])).best()
         best = found if best is None else best.better(found)
     assert best is not None
     return best.decision(angles, method="brute-force", rollouts=ev.rollouts,

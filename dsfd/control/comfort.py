@@ -36,6 +36,8 @@ class ComfortCheck(NamedTuple):
     supply_air_c: float | None  #: air blown into the room, None when none is
     asymmetry_k: float  #: radiant asymmetry of the pane, + warm
     violations: tuple[str, ...]  #: one phrase per broken limit; empty if none or unoccupied
+    #: What comfort did to the decision (``Decision.comfort``, docs/model.md#comfort-trace).
+    bound: str = ""
 
     def describe(self) -> str:
         """One line for the decision trace."""
@@ -43,9 +45,9 @@ class ComfortCheck(NamedTuple):
         air = "none" if self.supply_air_c is None else f"{self.supply_air_c:.1f} °C"
         seen = (f"{state}; direct sun {self.direct_sun_wm2:.0f} W/m2, DGPs {self.dgp:.2f}, "
                 f"supply air {air}, asymmetry {self.asymmetry_k:+.1f} K")
-        if not self.violations:
-            return seen
-        return f"{seen}; would violate: {'; '.join(self.violations)}"
+        if self.violations:
+            seen = f"{seen}; would violate: {'; '.join(self.violations)}"
+        return f"{seen}; decision: {self.bound}" if self.bound else seen
 
 
 def view_factors(cfg: PanelConfig) -> tuple[float, float]:

@@ -16,6 +16,12 @@ from typing import NamedTuple
 import numpy as np
 
 from dsfd.config.panel import REGIME_OPENINGS, PanelConfig
+from dsfd.control.comfort_horizon import (
+    LIMIT_NAMES,
+    HorizonComfort,
+    acceptable,
+    equally_violating,
+)
 from dsfd.control.objective import CostTerms, horizon_cost, louver_move_penalty
 from dsfd.estimation.params import with_offsets
 from dsfd.physics.coupling import StepInputs
@@ -51,6 +57,9 @@ class ControlProblem:
         Calibrated heat-flux offsets on nodes x1..x4 (the self-calibration's input
         disturbance, :mod:`dsfd.estimation.params`), added to the absorbed short-wave so
         that the horizon is predicted by the same model the state estimate comes from.
+    occupied : ndarray (H,) of bool or None
+        Whether each horizon step is occupied; the comfort limits bind the occupied steps
+        (docs/model.md#comfort-constraints). None or all False: energy only.
     """
 
     x0: np.ndarray
@@ -61,6 +70,12 @@ class ControlProblem:
     previous_afr: int | None = None
     previous_or_pct: float | None = None
     heat_offsets_wm2: np.ndarray | None = None
+    occupied: np.ndarray | None = None
+
+    @property
+    def any_occupied(self) -> bool:
+        """Whether a comfort limit binds any step of the horizon."""
+        return self.occupied is not None and bool(np.any(self.occupied))
 
     def step_inputs(self, loads: OpticalLoads) -> StepInputs:
         """Model inputs of the horizon for louver loads ``loads``, offsets included."""
@@ -82,6 +97,9 @@ class Decision:
     terms_j: dict[str, float] = field(default_factory=dict)
     rollouts: int = 0
     trace: tuple[str, ...] = ()
+    #: What comfort did to the choice (docs/model.md#comfort-constraints): which limits bound
+    #: it, or that none could be met; empty when no step of the horizon is occupied.
+    comfort: str = ""
 
 
 def distinct_regimes(available: tuple[int, ...]) -> tuple[int, ...]:
@@ -132,21 +150,43 @@ class Candidates(NamedTuple):
 
 @dataclass(frozen=True, eq=False)
 class Evaluated:
-    """Candidates rolled out over the horizon: their cost terms and first-step regime labels."""
+    """Candidates rolled out over the horizon: their cost terms, first-step regime labels
+    and the relative excess of each comfort limit (C, 4), zero when nothing is occupied."""
 
     candidates: Candidates
     terms: CostTerms
     labels: np.ndarray
+    excess: np.ndarray
+
+    @property
+    def violation(self) -> np.ndarray:
+        """Normalised comfort violation per candidate (docs/model.md#comfort-constraints)."""
+        return self.excess.sum(axis=1)
+
+    def rank_cost(self, limits: slice = slice(None)) -> np.ndarray:
+        """The cost of the candidates a decision may take (:func:`acceptable`), +inf for the
+        others: ranking by it is ranking by cost under the comfort constraints (``limits``:
+        only those columns of :data:`LIMIT_NAMES`)."""
+        excess = self.excess[:, limits]
+        if not excess.any():
+            return self.terms.cost_j
+        return np.where(acceptable(excess.sum(axis=1)), self.terms.cost_j, np.inf)
 
     def best(self) -> Best:
-        """The cheapest (the first of equal costs)."""
-        return Best.of(self.terms, self.labels, *self.candidates)
+        """The cheapest acceptable (the first of equal costs)."""
+        i = int(np.argmin(self.rank_cost()))
+        return Best.at(i, self)
+
+    def cheapest(self) -> Best:
+        """The cheapest, comfort ignored (what energy alone would choose)."""
+        return Best.at(int(np.argmin(self.terms.cost_j)), self)
 
     def join(self, other: Evaluated) -> Evaluated:
         return Evaluated(self.candidates.join(other.candidates),
                          CostTerms(*(np.concatenate(v) for v in zip(self.terms, other.terms,
                                                                    strict=True))),
-                         np.concatenate([self.labels, other.labels]))
+                         np.concatenate([self.labels, other.labels]),
+                         np.concatenate([self.excess, other.excess]))
 
 
 class HorizonEvaluator:
@@ -155,7 +195,8 @@ class HorizonEvaluator:
     def __init__(self, cfg: PanelConfig, model: LumpedModel, optics: FacadeOptics,
                  problem: ControlProblem, angles_deg: np.ndarray, *,
                  coupling_tol_k: float | None = None,
-                 loads: OpticalLoads | None = None) -> None:
+                 loads: OpticalLoads | None = None,
+                 comfort: HorizonComfort | None = None) -> None:
         self.cfg = cfg
         self.model = model
         self.coupling_tol_k = coupling_tol_k
@@ -163,6 +204,12 @@ class HorizonEvaluator:
         self.angles_deg = np.asarray(angles_deg, float)
         self.loads = (optics.loads(problem.forcing, np.radians(self.angles_deg))
                       if loads is None else loads)
+        #: The comfort limits of the occupied steps; None (nothing occupied): energy only.
+        self.comfort = comfort
+        if comfort is None and problem.any_occupied:
+            assert problem.occupied is not None
+            self.comfort = HorizonComfort(cfg, optics, problem.forcing, self.angles_deg,
+                                          problem.occupied)
         self.rollouts = 0
         step = cfg.louver.step_deg if cfg.louver is not None else 18.0
         self._penalty = louver_move_penalty(
@@ -178,6 +225,13 @@ class HorizonEvaluator:
     def evaluate(self, angle_idx: np.ndarray, regime: np.ndarray,
                  or_: np.ndarray) -> tuple[CostTerms, np.ndarray]:
         """Cost of each candidate [J] (incl. move penalty) and its first-step regime label."""
+        ev = self.evaluate_all(Candidates(np.asarray(angle_idx, int), np.asarray(regime, int),
+                                          np.asarray(or_, float)))
+        return ev.terms, ev.labels
+
+    def evaluate_all(self, candidates: Candidates) -> Evaluated:
+        """Cost, first-step label and comfort excess of each candidate, kept with it."""
+        angle_idx, regime, or_ = candidates
         angle_idx = np.asarray(angle_idx, int)
         n = angle_idx.size
         h = self.problem.forcing.time_s.shape[0]
@@ -188,12 +242,9 @@ class HorizonEvaluator:
         self.rollouts += n
         terms = horizon_cost(traj, dt=self.model.dt, heating=self.problem.heating)
         terms = terms._replace(cost_j=terms.cost_j + self._penalty[angle_idx])
-        return terms, traj.label[:, 0]
-
-    def evaluate_all(self, candidates: Candidates) -> Evaluated:
-        """:meth:`evaluate` of a candidate record, kept together with it."""
-        terms, labels = self.evaluate(*candidates)
-        return Evaluated(candidates, terms, labels)
+        excess = (self.comfort.excess(angle_idx, traj) if self.comfort is not None
+                  else np.zeros((n, len(LIMIT_NAMES))))
+        return Evaluated(candidates, terms, traj.label[:, 0], excess)
 
 
 def _block_means(v: np.ndarray, factor: int, axis: int) -> np.ndarray:
@@ -231,24 +282,41 @@ class Best:
     or_: float
     label: int
     terms: dict[str, float]
+    #: Relative excess of each comfort limit (:data:`LIMIT_NAMES` order), zeros if none.
+    excess: tuple[float, ...] = (0.0,) * len(LIMIT_NAMES)
 
     @classmethod
-    def of(cls, terms: CostTerms, labels: np.ndarray, a: np.ndarray, r: np.ndarray,
-           o: np.ndarray) -> Best:
-        i = int(np.argmin(terms.cost_j))
-        return cls(float(terms.cost_j[i]), int(a[i]), int(r[i]), float(o[i]), int(labels[i]),
-                   {name: float(getattr(terms, name)[i]) for name in terms._fields})
+    def at(cls, i: int, ev: Evaluated) -> Best:
+        """Candidate ``i`` of an evaluated batch."""
+        a, r, o = ev.candidates
+        terms = ev.terms
+        return cls(float(terms.cost_j[i]), int(a[i]), int(r[i]), float(o[i]),
+                   int(ev.labels[i]),
+                   {name: float(getattr(terms, name)[i]) for name in terms._fields},
+                   tuple(float(v) for v in ev.excess[i]))
+
+    @property
+    def violation(self) -> float:
+        return float(sum(self.excess))
 
     def better(self, other: Best) -> Best:
-        return other if other.cost < self.cost else self
+        """The better of two: the cheaper where both are acceptable next to each other
+        (:func:`acceptable`), else the less violating."""
+        if equally_violating(self.violation, other.violation):
+            return other if other.cost < self.cost else self
+        return other if other.violation < self.violation else self
+
+    def same_controls(self, other: Best) -> bool:
+        return (self.angle_idx, self.regime, self.or_) == (other.angle_idx, other.regime,
+                                                           other.or_)
 
     def describe(self, angles: np.ndarray) -> str:
         return (f"louver {angles[self.angle_idx]:+.0f} deg, regime {self.label}, OR "
                 f"{self.or_ * 100:.1f} %, J {self.cost / 3600.0:+.2f} Wh")
 
     def decision(self, angles: np.ndarray, *, method: str, rollouts: int,
-                 trace: tuple[str, ...]) -> Decision:
+                 trace: tuple[str, ...], comfort: str = "") -> Decision:
         or_pct = 0.0 if self.regime == CLOSED else round(self.or_ * 100.0, 1)
         return Decision(phi_deg=float(angles[self.angle_idx]), afr=self.label, or_pct=or_pct,
                         method=method, cost_j=self.cost, terms_j=self.terms, rollouts=rollouts,
-                        trace=trace)
+                        trace=trace, comfort=comfort)

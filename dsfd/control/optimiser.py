@@ -20,6 +20,12 @@ import numpy as np
 
 from dsfd.config.control import Control
 from dsfd.config.panel import PanelConfig
+from dsfd.control.comfort_horizon import (
+    VISUAL_LIMITS,
+    block_any,
+    comfort_note,
+    limits_line,
+)
 from dsfd.control.horizon import (
     CLOSED,
     Best,
@@ -41,6 +47,9 @@ from dsfd.physics.regimes import ALL_OPEN
 # re-exported here, where the daemon and the public API have always found them.
 __all__ = ["CLOSED", "ControlProblem", "Decision", "HorizonEvaluator", "MpcOptimiser",
            "distinct_regimes", "optimise"]
+
+#: Openings tried at full resolution for the best pair when comfort binds (:func:`_or_ladder`).
+OR_LADDER = np.array([0.05, 0.1, 0.2, 0.35, 0.5, 0.7, 0.85])
 
 
 class MpcOptimiser:
@@ -75,12 +84,21 @@ class MpcOptimiser:
         ctl: Control = self.cfg.control
         trace = [f"candidates: {len(self.angles)} louver positions x {len(self.regimes)} damper "
                  f"sets (regimes {list(self.regimes)}), OR grid {list(ctl.or_grid_pct)} %"]
-        screen_problem = dataclasses.replace(problem,
-                                             forcing=coarsen(problem.forcing, self.factor))
+        screen_problem = dataclasses.replace(
+            problem, forcing=coarsen(problem.forcing, self.factor),
+            occupied=None if problem.occupied is None else block_any(problem.occupied,
+                                                                     self.factor))
         full = HorizonEvaluator(self.cfg, self.model, self.optics, problem, self.angles,
                                 coupling_tol_k=ctl.coupling_tolerance_k)
-        screen = HorizonEvaluator(self.cfg, self.screen_model, self.optics, screen_problem,
-                                  self.angles, loads=coarsen_loads(full.loads, self.factor))
+        comfort = full.comfort
+        if comfort is not None:
+            assert problem.occupied is not None
+            trace.append(limits_line(comfort))
+        screen = HorizonEvaluator(
+            self.cfg, self.screen_model, self.optics, screen_problem, self.angles,
+            loads=coarsen_loads(full.loads, self.factor),
+            comfort=None if comfort is None else comfort.coarsened(self.factor,
+                                                                   screen_problem.forcing))
         screened = self._screen(screen)
         trace.append(f"stage 1: screened {screened.candidates.size} candidates at "
                      f"{self.screen_model.dt:g} s steps")
@@ -90,11 +108,15 @@ class MpcOptimiser:
         n_pairs = min(ctl.refine_max_pairs, len(self.angles) * len(self.open_regimes))
         trace.append(f"stage 2: {finalists.size} at full resolution ({n_best} finalists, "
                      f"OR brackets of {n_pairs} pairs), best {best.describe(self.angles)}")
-        best, batches = self._refine(full, evaluated, best)
+        best, batches, evaluated = self._refine(full, evaluated, best)
         trace.append(f"stage 3: {batches} batch(es) of louver neighbours and OR points, best "
                      f"{best.describe(self.angles)}" if batches else
                      "stage 3: not needed (the best's louver neighbours were evaluated)")
-        return best.decision(self.angles, method="mpc",
+        note = ""
+        if comfort is not None:
+            note = comfort_note(best, evaluated.cheapest(), self.angles)
+            trace.append(f"comfort: {note}")
+        return best.decision(self.angles, method="mpc", comfort=note,
                              rollouts=full.rollouts + screen.rollouts, trace=tuple(trace))
 
     def _screen(self, screen: HorizonEvaluator) -> Evaluated:
@@ -114,8 +136,20 @@ class MpcOptimiser:
         """Stage 2's one full-resolution batch: the best screened candidates, and OR brackets
         (:meth:`_or_brackets`); with the number of screened candidates among them."""
         ctl = self.cfg.control
-        cost, cand = screened.terms.cost_j, screened.candidates
+        # Under comfort limits the ranking cost is +inf where a candidate breaks them: the
+        # stages below then search among the candidates a decision may take.
+        cost, cand = screened.rank_cost(), screened.candidates
         best = _best_screened(cost, cand.regime, ctl.full_candidates, ctl.finalist_margin_pct)
+        if screened.excess.any():
+            # The coarse step can misjudge the thermal limits (a flow it shows reversed into
+            # the room with cold air while one-minute steps show exhaust: a damper set
+            # screened infeasible that is the best at full resolution, seen); the visual
+            # limits depend on the louver alone. So also the finalists under the visual
+            # limits only, and what energy alone would choose (the trace's "what bound it").
+            visual = _best_screened(screened.rank_cost(VISUAL_LIMITS), cand.regime,
+                                    ctl.full_candidates, ctl.finalist_margin_pct)
+            alone = np.argsort(screened.terms.cost_j, kind="stable")[: ctl.full_candidates]
+            best = np.union1d(best, np.union1d(visual, alone))
         # The all-open set at every coarse OR at the screened best louver position: its
         # flows can switch pattern twice within the horizon at one-minute steps, which the
         # coarse step cannot represent (Q_air of the other sign, cost 25 % off, seen) — a
@@ -154,13 +188,17 @@ class MpcOptimiser:
         return brackets.join(neighbours)
 
     def _refine(self, full: HorizonEvaluator, evaluated: Evaluated,
-                best: Best) -> tuple[Best, int]:
+                best: Best) -> tuple[Best, int, Evaluated]:
         """Stage 3: the louver positions next to the best (the screening can misrank
         neighbouring angles by a tenth of a per cent) and parabolic refinement of the best
-        pair's OR, one batch per round. Returns the best and the number of batches."""
+        pair's OR, one batch per round. Returns the best, the number of batches and every
+        full-resolution candidate."""
         ctl = self.cfg.control
         new = _louver_neighbours(best, len(self.angles), ctl.louver_neighbours,
                                  evaluated.candidates)
+        if (evaluated.excess.any() and best.regime != CLOSED
+                and not best.same_controls(evaluated.cheapest())):
+            new = new.join(_or_ladder(best, evaluated.candidates))  # comfort binds
         batches = 0
         for round_ in range(max(1, ctl.or_refine_rounds)):
             cand, cost = evaluated.candidates, evaluated.terms.cost_j
@@ -179,13 +217,27 @@ class MpcOptimiser:
             best = best.better(batch.best())
             evaluated = evaluated.join(batch)
             new = Candidates.empty()  # neighbours: once
-        return best, batches
+        return best, batches, evaluated
 
 
 def _around(idx: int, n_angles: int, reach: int) -> np.ndarray:
     """Louver indices within ``reach`` steps of ``idx`` (itself excluded)."""
     out = np.arange(idx - reach, idx + reach + 1)
     return out[(out >= 0) & (out < n_angles) & (out != idx)]
+
+
+def _or_ladder(best: Best, evaluated: Candidates) -> Candidates:
+    """The openings of :data:`OR_LADDER` not yet evaluated for the best pair, when comfort
+    binds (the best is not the cheapest). The coarse OR grid and its bracket suffice for
+    energy alone (its best opening was never interior in 600 cases), not for the pairs
+    comfort leaves: behind a cut-off louver the all-open set had its best opening at 5 %
+    (27 % of the cost missed, seen), and the screening can misjudge which set is feasible,
+    so the full-resolution best may be a pair it never bracketed; a thermal limit also ends
+    the opening's range at the largest flow that keeps the supply air warm enough."""
+    seen = (evaluated.angle_idx == best.angle_idx) & (evaluated.regime == best.regime)
+    points = OR_LADDER[~np.isin(OR_LADDER, evaluated.or_[seen])]
+    return Candidates(np.full(points.size, best.angle_idx), np.full(points.size, best.regime),
+                      points)
 
 
 def _louver_neighbours(best: Best, n_angles: int, reach: int,

@@ -43,8 +43,9 @@ from dsfd.config.control import Control
 from dsfd.config.panel import PanelConfig
 from dsfd.control.baseline import rule_decision
 from dsfd.control.comfort import ComfortCheck, comfort_check
+from dsfd.control.comfort_horizon import LEAST_VIOLATION
 from dsfd.control.objective import is_heating
-from dsfd.control.occupancy import EffectiveOccupancy
+from dsfd.control.occupancy import EffectiveOccupancy, effective_profile
 from dsfd.control.optimiser import ControlProblem, Decision, MpcOptimiser
 from dsfd.daemon.calibration import CalibrationStage, UpdateOutcome
 from dsfd.daemon.clock import Clock, Slot, WallClockWatch
@@ -55,6 +56,7 @@ from dsfd.daemon.logging_setup import get_logger
 from dsfd.daemon.manual import ManualStage
 from dsfd.daemon.memory import trim_heap
 from dsfd.daemon.observer import STATE_SIGNALS, StateEstimate, StateObserver, horizon_end
+from dsfd.daemon.occupancy import OCCUPIED_SIGNAL
 from dsfd.daemon.outcome import CycleOutcome
 from dsfd.daemon.quality import QualityChecker
 from dsfd.daemon.record import cycle_record
@@ -145,9 +147,12 @@ class Controller:
         mark = time.perf_counter()
         objective, objective_by = self.manual.objective_mode
         heating, forecast = self._outlook(weather, objective, now_s)
+        occupied_steps = self._occupancy_profile(now_s, self.cfg.control.horizon_steps,
+                                                 checked)
         if hold is None:
             decision, method, fallback, no_decision = await self._decide(
-                weather, estimate, current, checked, forecast, heating=bool(heating))
+                weather, estimate, current, checked, forecast, heating=bool(heating),
+                occupancy=occupied_steps)
         else:  # a person has the panel: nothing to optimise
             decision, method, fallback, no_decision = None, "manual", "", ""
         t["decide"] = _ms(mark)
@@ -173,7 +178,7 @@ class Controller:
         horizon_x = self._horizon_end(estimate, forecast, applied)
         t["predict"] = _ms(mark)
         mark = time.perf_counter()
-        comfort = self._comfort(estimate, forecast, safe.command, occupancy)
+        comfort = self._comfort(estimate, forecast, safe.command, occupancy, decision)
         t["comfort"] = _ms(mark)
 
         outcome = CycleOutcome(
@@ -276,10 +281,23 @@ class Controller:
             log.info("calibration update skipped: %s", outcome.skipped)
         return outcome
 
+    def _occupancy_profile(self, now_s: float, steps: int, checked: Sample) -> np.ndarray:
+        """Whether the room is occupied at the start of each of the next ``steps`` model
+        steps from ``now_s``: the one place the decision learns about occupancy
+        (docs/model.md#comfort-constraints): an operator's override until its end, else the
+        occupied signal's GOOD reading carried over, else the weekly schedule."""
+        times_s = now_s + self.cfg.model.step_s * np.arange(max(steps, 1))
+        profile, _ = effective_profile(
+            times_s, occupancy=self.cfg.occupancy, utc_offset_h=self.cfg.site.utc_offset_h,
+            override=self.manual.occupancy.override, signal=checked.good(OCCUPIED_SIGNAL))
+        return profile
+
     async def _decide(self, weather: CycleWeather, estimate: StateEstimate,
                       current: Command | None, checked: Sample, forecast: Forcing | None, *,
-                      heating: bool) -> tuple[Decision | None, str, str, str]:
-        """(decision, method, fallback reason, why no decision at all)."""
+                      heating: bool, occupancy: np.ndarray
+                      ) -> tuple[Decision | None, str, str, str]:
+        """(decision, method, fallback reason, why no decision at all); ``occupancy`` per
+        horizon step (:meth:`_occupancy_profile`)."""
         if weather.inputs is None or weather.forcing is None or forecast is None:
             why = "required weather not GOOD: " + ", ".join(
                 f"{n} ({checked.quality(n).value})" for n in weather.missing)
@@ -296,10 +314,13 @@ class Controller:
                     heat_offsets_wm2=self.calibration.offsets,
                     previous_phi_deg=None if current is None else current.phi_deg,
                     previous_afr=None if current is None else current.afr,
-                    previous_or_pct=None if current is None else current.or_pct)
+                    previous_or_pct=None if current is None else current.or_pct,
+                    occupied=occupancy)
                 decision, why = await self.optimise_job.run(
                     self._optimiser(problem), budget_s=self.cfg.control.time_budget_s)
                 if decision is not None and _command_or_none(decision) is not None:
+                    if decision.comfort.startswith(LEAST_VIOLATION):
+                        log.info("comfort: %s", decision.comfort)
                     return decision, decision.method, "", ""
                 fallback = why or f"optimiser returned an invalid command {decision}"
         t5 = estimate.celsius(4) if estimate.age_cycles[4] <= \
@@ -309,7 +330,7 @@ class Controller:
             self.cfg, heating=heating, t5_c=t5, t_in_c=weather.t_room_c,
             t_out_c=float(weather.inputs.t_out_k[0]) - T_ZERO,
             beam_wm2=float(forcing.beam_wm2[0]), profile_deg=float(forcing.profile_deg[0]),
-            previous_afr=None if current is None else current.afr)
+            previous_afr=None if current is None else current.afr, occupied=bool(occupancy[0]))
         if fallback:
             log.info("fallback to the baseline: %s", fallback)
         return decision, "rule", fallback, ""
@@ -335,19 +356,26 @@ class Controller:
             return None
 
     def _comfort(self, estimate: StateEstimate, forecast: Forcing | None, command: Command,
-                 occupancy: EffectiveOccupancy) -> ComfortCheck | None:
-        """The comfort limits ``command`` would break (docs/model.md#comfort), for the trace:
-        the pane and the supply air taken as the estimated x3 and cavity air x5 now, the
-        occupancy as resolved this cycle (override > signal > schedule)."""
+                 occupancy: EffectiveOccupancy, decision: Decision | None
+                 ) -> ComfortCheck | None:
+        """The comfort of the command sent and what bound its choice, for the trace
+        (docs/model.md#comfort-trace): pane and supply air are the estimated x3 and x5 now,
+        the occupancy as resolved this cycle (override > signal > schedule)."""
         if forecast is None or not estimate.usable:
             return None
         is_occupied = occupancy.occupied
+        bound = ""
+        if decision is not None and decision.comfort:
+            sent = _command_or_none(decision) == command
+            bound = decision.comfort if sent else (
+                f"{decision.comfort} (then the safety pipeline changed the command)")
         try:
             return comfort_check(self.cfg, self.optics, forecast, phi_deg=command.phi_deg,
                                  afr=command.afr, or_pct=command.or_pct,
                                  occupied=is_occupied,
                                  t_pane_c=float(estimate.x_k[2]) - T_ZERO,
-                                 t_supply_c=float(estimate.x_k[4]) - T_ZERO)
+                                 t_supply_c=float(estimate.x_k[4]) - T_ZERO)._replace(
+                                     bound=bound)
         except (ValueError, ArithmeticError):
             log.exception("comfort check failed")
             return None

@@ -65,8 +65,8 @@ class CycleOutcome:
     events: list[tuple[str, str, str]] = field(default_factory=list)
     #: Operator commands handled this cycle: (command_id, status, reason).
     command_results: list[tuple[int, str, str]] = field(default_factory=list)
-    #: The comfort limits the command would break (docs/model.md#comfort); informative
-    #: only, the decision ignores them. None without a forecast or a usable estimate.
+    #: The command's comfort now, the limits it would break and what bound its choice
+    #: (docs/model.md#comfort-trace). None without a forecast or a usable estimate.
     comfort: ComfortCheck | None = None
     #: The occupancy in force this cycle and where it came from (issue 36), and the
     #: operator's occupancy override in force (None: none).

@@ -37,7 +37,7 @@ def cycle_record(out: CycleOutcome, weather: CycleWeather, calibration: Calibrat
         trace.append({"stage": "occupancy", "set": {"occupied": out.occupancy.occupied,
                                                     "source": out.occupancy.source},
                       "why": out.occupancy.why})
-    if out.comfort is not None:  # informative: the decision did not weigh it
+    if out.comfort is not None:  # the command's comfort and what bound its choice
         trace.append({"stage": "comfort", "set": {}, "why": out.comfort.describe()})
     if weather.notes:
         trace.append({"stage": "inputs", "set": {}, "why": "; ".join(weather.notes)})

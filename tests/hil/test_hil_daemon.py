@@ -37,18 +37,19 @@ HIL_PLANT = plant_options("lumped")
 
 
 async def run_hil(tmp_path: Path, panel: Path, emulator: EmulatedModbusDevice,
-                  station: StationEmulator, start_io: Awaitable[None]
+                  station: StationEmulator, start_io: Awaitable[None], *, cycles: int = CYCLES
                   ) -> tuple[PlantBridge, Path, dict[str, float]]:
-    """Run the daemon for CYCLES cycles; the bridge, the database and the final registers."""
+    """Run the daemon for ``cycles`` cycles; the bridge, the database and the final
+    registers."""
     cfg = load_panel(panel)
-    plant = simulated_plant(cfg, start_s=parse_iso_utc(MORNING_ISO), cycles=4 * CYCLES,
+    plant = simulated_plant(cfg, start_s=parse_iso_utc(MORNING_ISO), cycles=4 * cycles,
                             options=HIL_PLANT).plant
     await start_io
     bridge = PlantBridge(plant, io=emulator, station=station, speed=SPEED)
     await bridge.start()
     state = tmp_path / "state"
     daemon = await DaemonProcess(["run", "--config", str(panel), "--speed", str(SPEED),
-                                  "--start", MORNING_ISO, "--cycles", str(CYCLES),
+                                  "--start", MORNING_ISO, "--cycles", str(cycles),
                                   "--state-dir", str(state)]).start()
     try:
         rc = await daemon.wait_exit()
