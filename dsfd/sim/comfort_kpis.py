@@ -1,0 +1,102 @@
+"""Comfort figures of a closed-loop run, measured on the truth plant (issue 36, §5).
+
+Per cycle the run records whether the room was occupied (the panel's ``occupancy:`` at the
+middle of the cycle's interval) and, for occupied cycles, the plant's comfort quantities at the
+end of the interval (:meth:`dsfd.sim.plant.plant.Plant.comfort`: the state the command
+produced). :func:`comfort_figures` counts the occupied minutes that break each limit of the
+panel's ``comfort:`` section (docs/model.md#comfort, docs/model.md#plant-comfort).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from dsfd.config.comfort import Comfort, Occupancy
+from dsfd.physics.comfort_thermal import asymmetry_limit_k, supply_air_min_c
+from dsfd.sim.plant.comfort import PlantComfort
+
+__all__ = ["COMFORT_FIGURES", "OFFICE_HOURS", "ComfortLog", "comfort_figures"]
+
+#: An office: weekdays 08:00-18:00 local time (the schedule of issue 36's targets).
+OFFICE_HOURS = Occupancy(mon=("08:00-18:00",), tue=("08:00-18:00",), wed=("08:00-18:00",),
+                         thu=("08:00-18:00",), fri=("08:00-18:00",))
+
+#: The figures of :func:`comfort_figures`, in report order.
+COMFORT_FIGURES = ("occupied_min", "direct_sun_min", "dgp_p50", "dgp_p95", "dgp_max",
+                   "dgp_above_limit_share", "supply_air_below_min", "asymmetry_beyond_min")
+
+
+@dataclass
+class ComfortLog:
+    """Per-cycle comfort record of a closed-loop run (NaN where not measured)."""
+
+    step_s: float
+    occupied: list[bool]
+    direct_sun_wm2: list[float]
+    dgp: list[float]
+    supply_air_c: list[float]  # NaN: no air entered the room (or unoccupied)
+    asymmetry_k: list[float]
+
+    @classmethod
+    def empty(cls, step_s: float) -> ComfortLog:
+        return cls(float(step_s), [], [], [], [], [])
+
+    def append(self, occupied: bool, measured: PlantComfort | None) -> None:
+        """One cycle: ``measured`` is None for a cycle that was not measured (unoccupied)."""
+        self.occupied.append(bool(occupied))
+        if measured is None:
+            values = (math.nan,) * 4
+        else:
+            values = (measured.direct_sun_wm2, measured.dgp,
+                      math.nan if measured.supply_air_c is None else measured.supply_air_c,
+                      measured.asymmetry_k)
+        for column, v in zip((self.direct_sun_wm2, self.dgp, self.supply_air_c,
+                              self.asymmetry_k), values, strict=True):
+            column.append(float(v))
+
+
+def comfort_figures(log: ComfortLog, comfort: Comfort,
+                    keep: np.ndarray | None = None) -> dict[str, float]:
+    """Occupied minutes breaking each comfort limit and the DGPs distribution.
+
+    Parameters
+    ----------
+    log : ComfortLog
+    comfort : Comfort
+        The limits (the panel's ``comfort:``).
+    keep : bool array, optional
+        The cycles to count (e.g. the scored day of a bench case); default all.
+
+    Returns
+    -------
+    dict
+        ``occupied_min``; ``direct_sun_min`` (beam into the room above
+        ``direct_sun_max_wm2``); ``dgp_p50``, ``dgp_p95``, ``dgp_max`` (over the occupied
+        cycles, NaN without any) and ``dgp_above_limit_share`` (of the occupied cycles above
+        ``dgp_max``); ``supply_air_below_min`` (air entering the room colder than the supply
+        limit); ``asymmetry_beyond_min`` (warm or cool pane beyond ISO 7730's category limit).
+        All counts are in minutes of occupied cycles.
+    """
+    occ = np.asarray(log.occupied, bool)
+    if keep is not None:
+        occ = occ & np.asarray(keep, bool)
+    minutes = log.step_s / 60.0
+    sun, dgp, air, asym = (np.asarray(v, float)[occ] for v in (
+        log.direct_sun_wm2, log.dgp, log.supply_air_c, log.asymmetry_k))
+    warm = asymmetry_limit_k(comfort.category, warm=True)
+    cool = asymmetry_limit_k(comfort.category, warm=False)
+    with np.errstate(invalid="ignore"):
+        beyond = (asym > warm) | (asym < -cool)
+        cold_air = air < supply_air_min_c(comfort)  # NaN (no inflow) is never below
+    out = {"occupied_min": float(occ.sum() * minutes),
+           "direct_sun_min": float(np.sum(sun > comfort.direct_sun_max_wm2) * minutes)}
+    for name, q in (("dgp_p50", 50), ("dgp_p95", 95), ("dgp_max", 100)):
+        out[name] = float(np.percentile(dgp, q)) if dgp.size else math.nan
+    out["dgp_above_limit_share"] = float(np.mean(dgp > comfort.dgp_max)) if dgp.size \
+        else math.nan
+    out["supply_air_below_min"] = float(np.sum(cold_air) * minutes)
+    out["asymmetry_beyond_min"] = float(np.sum(beyond) * minutes)
+    return out
