@@ -16,17 +16,42 @@ import numpy as np
 
 from dsfd.config.comfort import Comfort, Occupancy
 from dsfd.physics.comfort_thermal import asymmetry_limit_k, supply_air_min_c
+from dsfd.sim.choices import OCCUPANCY_CHOICES
 from dsfd.sim.plant.comfort import PlantComfort
 
-__all__ = ["COMFORT_FIGURES", "OFFICE_HOURS", "ComfortLog", "comfort_figures"]
+__all__ = ["COMFORT_FIGURES", "OCCUPANCY_CHOICES", "ComfortLog", "comfort_figures",
+           "occupancy_for", "weekly_hours"]
 
-#: An office: weekdays 08:00-18:00 local time (the schedule of issue 36's targets).
-OFFICE_HOURS = Occupancy(mon=("08:00-18:00",), tue=("08:00-18:00",), wed=("08:00-18:00",),
-                         thu=("08:00-18:00",), fri=("08:00-18:00",))
+_DAY = ("08:00-18:00",)
+#: The named schedules of :data:`~dsfd.sim.choices.OCCUPANCY_CHOICES`: an office, weekdays
+#: 08:00-18:00 local time (the schedule of issue 36's targets), and the same hours every day
+#: (the bundled January record's clear and overcast days are a Sunday and a Saturday at the
+#: Suwon site); ``panel`` is the panel's own ``occupancy:``, ``none`` never occupied.
+_SCHEDULES = {
+    "office-weekdays": Occupancy(mon=_DAY, tue=_DAY, wed=_DAY, thu=_DAY, fri=_DAY),
+    "office-every-day": Occupancy(mon=_DAY, tue=_DAY, wed=_DAY, thu=_DAY, fri=_DAY, sat=_DAY,
+                                  sun=_DAY),
+}
 
 #: The figures of :func:`comfort_figures`, in report order.
 COMFORT_FIGURES = ("occupied_min", "direct_sun_min", "dgp_p50", "dgp_p95", "dgp_max",
                    "dgp_above_limit_share", "supply_air_below_min", "asymmetry_beyond_min")
+
+
+def occupancy_for(name: str, panel: Occupancy | None) -> Occupancy | None:
+    """The schedule called ``name`` (:data:`OCCUPANCY_CHOICES`); ``panel`` is the panel's."""
+    if name not in OCCUPANCY_CHOICES:
+        raise ValueError(f"occupancy {name!r}: choose one of {', '.join(OCCUPANCY_CHOICES)}")
+    if name == "panel":
+        return panel
+    return _SCHEDULES.get(name)
+
+
+def weekly_hours(occupancy: Occupancy | None) -> float:
+    """Occupied hours of a week (holidays aside)."""
+    if occupancy is None:
+        return 0.0
+    return sum(end - start for wd in range(7) for start, end in occupancy.intervals(wd)) / 60.0
 
 
 @dataclass
