@@ -107,11 +107,10 @@ def comfort_figure(ctx: Context) -> Figure:
     axes = fig.subplots(2, 1, sharex=True, height_ratios=[1.0, 1.2])
     fig.suptitle("Occupant comfort: glare at the eye, and the louver against the sun "
                  "cut-off angle", fontsize=13, x=0.01, ha="left")
-    cfg = _panel(ctx)
+    cfg, why = _panel(ctx)
     if cfg is None or not len(h):
         for ax in axes:
-            nothing(ax, "no panel configuration stored with this log (older dsfd): the "
-                    "comfort cannot be recomputed" if len(h) else "no cycles logged")
+            nothing(ax, why if len(h) else "no cycles logged")
             ax.set_axis_off()
         return fig
     # A reading is the mean of the interval that ends at its stamp, which the previous
@@ -129,13 +128,22 @@ def comfort_figure(ctx: Context) -> Figure:
     return fig
 
 
-def _panel(ctx: Context) -> PanelConfig | None:
+#: The sections the figure's optics and limits need (the rest, e.g. the stage budgets a
+#: closed-loop simulation lifts beyond their bounds, stays out of the way).
+_SECTIONS = ("panel", "site", "facade", "glazing", "louver", "openings", "room", "daylight",
+             "model", "parameters", "occupancy", "comfort")
+
+
+def _panel(ctx: Context) -> tuple[PanelConfig | None, str]:
+    """The run's panel, or None and why not."""
     if ctx.config is None:
-        return None
+        return None, ("no panel configuration stored with this log (older dsfd) and none "
+                      "given (--config): the comfort cannot be recomputed")
+    doc = {k: v for k, v in ctx.config.items() if k in _SECTIONS}
     try:
-        return panel_from_mapping(dict(ctx.config))
-    except (ConfigError, TypeError, ValueError):
-        return None
+        return panel_from_mapping(doc), ""
+    except ConfigError as exc:
+        return None, f"the stored configuration does not load: {exc}"
 
 
 def _glare_panel(ctx: Context, ax: Axes, c: LoggedComfort, cfg: PanelConfig) -> None:
@@ -144,7 +152,7 @@ def _glare_panel(ctx: Context, ax: Axes, c: LoggedComfort, cfg: PanelConfig) -> 
     ax.axhline(c.dgp_limit, color="black", ls="--", lw=1.0,
                label=f"limit {c.dgp_limit:g} (EN 17037 {glare_class(c.dgp_limit)})")
     ax.set_ylim(0.15, 1.02)
-    ax.set_ylabel("simplified daylight\nglare probability [-]")
+    ax.set_ylabel("simplified daylight glare\nprobability DGPs [-] (≤ 1)")
     occ = c.occupied & np.isfinite(c.dgp)
     if occ.any():
         above = np.mean(c.dgp[occ] > c.dgp_limit)
@@ -172,6 +180,12 @@ def _cutoff_panel(ctx: Context, ax: Axes, c: LoggedComfort) -> None:
     ax.plot(t, upper, color="#ff7f0e", lw=1.0, ls=":", label="cut-off (slats closed upward)")
     ax.step(*broken(ctx, ctx.history.applied()["phi_deg"]), where="post", color="black",
             lw=1.4, label="louver angle")
+    # Where the occupants got the sun: a red rug under the angles.
+    sun = c.occupied & (c.direct_sun_wm2 > c.direct_sun_limit_wm2)
+    if sun.any():
+        ts, flag = broken(ctx, np.where(sun, -86.0, np.nan))
+        ax.plot(ts, flag, color="#d62728", lw=5, solid_capstyle="butt",
+                label=f"occupied, direct sun > {c.direct_sun_limit_wm2:g} W/m²")
     ax.set_ylim(-95, 95)
     ax.set_yticks(range(-90, 91, 30))
     ax.set_ylabel("slat angle [deg]\n(+: outdoor tip up)")
