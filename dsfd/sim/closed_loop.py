@@ -55,12 +55,10 @@ from dsfd.config.comfort import Comfort
 from dsfd.config.panel import PanelConfig
 from dsfd.config.parameters import N_PARAMS
 from dsfd.control.objective import is_heating
-from dsfd.control.occupancy import occupied
 from dsfd.daemon.calibration import CalibrationStage
 from dsfd.daemon.clock import SimulatedClock, Slot
 from dsfd.daemon.loop import Controller
 from dsfd.drivers.simulated import SimulatedDriver
-from dsfd.physics.comfort_thermal import asymmetry_limit_k, supply_air_min_c
 from dsfd.physics.constants import T_ZERO
 from dsfd.physics.model import LumpedModel
 from dsfd.physics.solar import solar_position
@@ -71,7 +69,7 @@ from dsfd.sim.choices import (
     CalibrationName,
     ControllerName,
 )
-from dsfd.sim.comfort_kpis import ComfortLog, comfort_figures
+from dsfd.sim.comfort_kpis import ComfortLog, comfort_summary
 from dsfd.sim.oracle_controllers import (
     CONTROLLER_CLASSES,
     FrozenCalibration,
@@ -180,16 +178,10 @@ class ClosedLoopResult:
     comfort_limits: Comfort = field(default_factory=Comfort)
 
     def comfort_summary(self, keep: np.ndarray | None = None) -> dict[str, float]:
-        """:func:`~dsfd.sim.comfort_kpis.comfort_figures` of the run (``keep``: the cycles
-        to count) with the limits, JSON-ready; empty without a comfort log."""
-        if self.comfort is None:
-            return {}
-        lim = self.comfort_limits
-        return {**comfort_figures(self.comfort, lim, keep),
-                "direct_sun_limit_wm2": lim.direct_sun_max_wm2, "dgp_limit": lim.dgp_max,
-                "supply_air_limit_c": supply_air_min_c(lim),
-                "asymmetry_limit_warm_k": asymmetry_limit_k(lim.category, warm=True),
-                "asymmetry_limit_cool_k": asymmetry_limit_k(lim.category, warm=False)}
+        """:func:`~dsfd.sim.comfort_kpis.comfort_summary` of the run (``keep``: the cycles to
+        count); empty without a comfort log."""
+        return {} if self.comfort is None else comfort_summary(self.comfort,
+                                                               self.comfort_limits, keep)
 
     @property
     def cycles(self) -> int:
@@ -346,14 +338,6 @@ def _controller_for(ctrl_cfg: PanelConfig, plant: Plant, settings: ClosedLoopSet
     return controller
 
 
-def _log_comfort(log: ComfortLog, plant: Plant, cfg: PanelConfig) -> None:
-    """Occupancy at the middle of the interval just held; the plant's comfort at its end
-    (the state the command produced), measured only while occupied (docs/model.md#plant-comfort)."""
-    mid = plant.time_s - 0.5 * float(cfg.model.step_s)
-    occ = bool(occupied(mid, occupancy=cfg.occupancy, utc_offset_h=cfg.site.utc_offset_h))
-    log.append(occ, plant.comfort() if occ else None)
-
-
 async def _run(cfg: PanelConfig, plant: Plant, settings: ClosedLoopSettings, start: float,
                n: int, state_dir: Path, progress: Callable[[int, int], None] | None
                ) -> ClosedLoopResult:
@@ -399,7 +383,7 @@ async def _run(cfg: PanelConfig, plant: Plant, settings: ClosedLoopSettings, sta
             # behind), so the room heat of each interval is attributed to its command.
             for k in ROOM_FLOWS:
                 heat[k].append(after[k] - before[k])
-            _log_comfort(comfort, plant, cfg)
+            comfort.record(plant)
             station = plant.station_weather()
             if mode is None:  # no controller decided a mode: the panel's rule, as the loop
                 mode = is_heating(cfg.control, station["t_out_c"] + T_ZERO)

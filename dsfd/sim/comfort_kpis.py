@@ -11,16 +11,21 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from dsfd.config.comfort import Comfort, Occupancy
+from dsfd.control.occupancy import occupied
 from dsfd.physics.comfort_thermal import asymmetry_limit_k, supply_air_min_c
 from dsfd.sim.choices import OCCUPANCY_CHOICES
 from dsfd.sim.plant.comfort import PlantComfort
 
+if TYPE_CHECKING:
+    from dsfd.sim.plant.plant import Plant
+
 __all__ = ["COMFORT_FIGURES", "OCCUPANCY_CHOICES", "ComfortLog", "comfort_figures",
-           "occupancy_for", "weekly_hours"]
+           "comfort_summary", "occupancy_for", "weekly_hours"]
 
 _DAY = ("08:00-18:00",)
 #: The named schedules of :data:`~dsfd.sim.choices.OCCUPANCY_CHOICES`: an office, weekdays
@@ -69,9 +74,18 @@ class ComfortLog:
     def empty(cls, step_s: float) -> ComfortLog:
         return cls(float(step_s), [], [], [], [], [])
 
-    def append(self, occupied: bool, measured: PlantComfort | None) -> None:
+    def record(self, plant: Plant) -> None:
+        """The cycle whose interval ``plant`` just integrated: occupied at the interval's
+        middle (the panel's ``occupancy:``), measured at its end (the state the command
+        produced) and only while occupied (docs/model.md#plant-comfort)."""
+        cfg = plant.cfg
+        mid = plant.time_s - 0.5 * self.step_s
+        occ = bool(occupied(mid, occupancy=cfg.occupancy, utc_offset_h=cfg.site.utc_offset_h))
+        self.append(occ, plant.comfort() if occ else None)
+
+    def append(self, is_occupied: bool, measured: PlantComfort | None) -> None:
         """One cycle: ``measured`` is None for a cycle that was not measured (unoccupied)."""
-        self.occupied.append(bool(occupied))
+        self.occupied.append(bool(is_occupied))
         if measured is None:
             values = (math.nan,) * 4
         else:
@@ -125,3 +139,13 @@ def comfort_figures(log: ComfortLog, comfort: Comfort,
     out["supply_air_below_min"] = float(np.sum(cold_air) * minutes)
     out["asymmetry_beyond_min"] = float(np.sum(beyond) * minutes)
     return out
+
+
+def comfort_summary(log: ComfortLog, comfort: Comfort,
+                    keep: np.ndarray | None = None) -> dict[str, float]:
+    """:func:`comfort_figures` with the limits they were judged by, JSON-ready."""
+    return {**comfort_figures(log, comfort, keep),
+            "direct_sun_limit_wm2": comfort.direct_sun_max_wm2, "dgp_limit": comfort.dgp_max,
+            "supply_air_limit_c": supply_air_min_c(comfort),
+            "asymmetry_limit_warm_k": asymmetry_limit_k(comfort.category, warm=True),
+            "asymmetry_limit_cool_k": asymmetry_limit_k(comfort.category, warm=False)}
