@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
+from dsfd.control.comfort import view_factors
 from dsfd.physics.comfort_geometry import window_view_factor
 from dsfd.physics.comfort_thermal import radiant_asymmetry_k
 from dsfd.physics.comfort_visual import dgp_simplified, eye_illuminance_lx
@@ -85,8 +86,6 @@ class PlantComfortMeter:
     """Evaluates :class:`PlantComfort` for one plant (what stays fixed is computed once)."""
 
     def __init__(self, plant: Plant) -> None:
-        from dsfd.control.comfort import view_factors
-
         cfg = plant.cfg
         self.cfg, self.options = cfg, plant.options
         self.fine = plant.options.optics != "lumped"
