@@ -1,4 +1,4 @@
-"""Comfort figures of a closed-loop run, measured on the truth plant (issue 36, §5).
+"""Comfort figures of a closed-loop run, measured on the truth plant (issue 36).
 
 Per cycle the run records whether the room was occupied (the panel's ``occupancy:`` at the
 middle of the cycle's interval) and, for occupied cycles, the plant's comfort quantities at the
