@@ -121,10 +121,6 @@ def comfort_figure(ctx: Context) -> Figure:
     c = logged_comfort(cfg, time_mid, h.good("t_out_c"), h.good("ghi_wm2"), held)
     _glare_panel(ctx, axes[0], c, cfg)
     _cutoff_panel(ctx, axes[1], c)
-    if cfg.occupancy is None:
-        axes[0].text(0.01, 0.97, "the panel has no occupancy: schedule: never occupied, no "
-                     "comfort limit applies", transform=axes[0].transAxes, fontsize=9,
-                     va="top", color="#555555")
     return fig
 
 
@@ -161,6 +157,10 @@ def _glare_panel(ctx: Context, ax: Axes, c: LoggedComfort, cfg: PanelConfig) -> 
                      f"sun above {c.direct_sun_limit_wm2:g} W/m² in {sun:.0%} (eye "
                      f"{cfg.comfort.occupant_distance_m:g} m from the pane, "
                      f"{cfg.comfort.eye_height_m:g} m high)", fontsize=9, loc="left")
+    else:
+        ax.set_title("the panel has no occupancy: schedule: never occupied, no comfort limit "
+                     "applies" if cfg.occupancy is None else "no occupied cycle in this log",
+                     fontsize=9, loc="left", color="#555555")
     if not np.isfinite(c.dgp).any():
         nothing(ax, "no good weather readings to recompute the glare from")
     ax.legend(**OUTSIDE)
