@@ -46,7 +46,7 @@ import numpy as np
 from dsfd.bench.oracle_cache import OracleCache, config_digest
 from dsfd.config.panel import PanelConfig
 from dsfd.physics.solar import extraterrestrial_irradiance, solar_position
-from dsfd.sim.choices import BENCH_CONTROLLERS
+from dsfd.sim.choices import BENCH_CONTROLLERS, OccupancyName
 from dsfd.sim.closed_loop import (
     J_PER_KWH,
     ClosedLoopResult,
@@ -159,7 +159,7 @@ def bench_closed_loop(cfg: PanelConfig, series: WeatherSeries, *, days: float = 
                       progress: Callable[[str], None] | None = None,
                       on_figures: Callable[[dict[str, float]], None] | None = None,
                       oracle_cache: OracleCache | None = None,
-                      occupancy: str = "office-every-day") -> dict[str, float]:
+                      occupancy: OccupancyName = "office-every-day") -> dict[str, float]:
     """Run every controller on every case; flat figures ``<case>.<controller>.<figure>``
     and ``<case>.mpc_share_of_plant_oracle_saving`` (and the other shares) when ``rule`` and
     ``plant-oracle`` are among ``controllers`` (a run of some controllers alone, e.g. to add
