@@ -254,12 +254,14 @@ def _comfort_rows(fig: dict[str, float], case: str, names: Sequence[str]) -> lis
     rows = [f"{name:<18}" + "".join(_cell(fig.get(f"{case}.{name}.{k}"), fmt) for k, fmt in (
         ("occupied_min", "9.0f"), ("direct_sun_min", "9.0f"), ("dgp_p50", "7.2f"),
         ("dgp_p95", "7.2f"), ("dgp_max", "7.2f"), ("dgp_above_limit_share", "8.0%"),
-        ("supply_air_below_min", "9.0f"), ("asymmetry_beyond_min", "9.0f")))
+        ("supply_air_in_min", "8.0f"), ("supply_air_below_min", "9.0f"),
+        ("asymmetry_beyond_min", "9.0f")))
         for name in names if f"{case}.{name}.occupied_min" in fig]
     if not rows:
         return []
     return [f"{'comfort (plant)':<18}{'occupied':>9}{'sun':>9}{'DGP50':>7}{'DGP95':>7}"
-            f"{'DGPmax':>7}{'>DGPlim':>8}{'cold air':>9}{'asymm.':>9}  [min]", *rows]
+            f"{'DGPmax':>7}{'>DGPlim':>8}{'air in':>8}{'cold air':>9}{'asymm.':>9}  [min]",
+            *rows]
 
 
 def _cell(value: float | None, fmt: str) -> str:

@@ -184,8 +184,11 @@ def comfort_lines(c: dict, *, scheduled: bool) -> list[str]:
             f"{c['direct_sun_limit_wm2']:g} W/m2: {c['direct_sun_min']:.0f} min",
             f"  DGPs p50 {c['dgp_p50']:.2f}, p95 {c['dgp_p95']:.2f}, max {c['dgp_max']:.2f}; "
             f"above {c['dgp_limit']:g} in {c['dgp_above_limit_share']:.0%} of occupied minutes",
-            f"  supply air below {c['supply_air_limit_c']:.1f} degC: "
-            f"{c['supply_air_below_min']:.0f} min; radiant asymmetry beyond "
+            f"  cavity air into the room {c['supply_air_in_min']:.0f} min"
+            + (f" (coldest {c['supply_air_coldest_c']:.1f} degC)" if c["supply_air_in_min"]
+               else "") + "; below the supply limit "
+            f"{c['supply_air_limit_c']:.1f} degC: {c['supply_air_below_min']:.0f} min",
+            f"  radiant asymmetry beyond "
             f"{c['asymmetry_limit_warm_k']:g} K warm / {c['asymmetry_limit_cool_k']:g} K cool: "
             f"{c['asymmetry_beyond_min']:.0f} min"]
 

@@ -40,7 +40,8 @@ _SCHEDULES = {
 
 #: The figures of :func:`comfort_figures`, in report order.
 COMFORT_FIGURES = ("occupied_min", "direct_sun_min", "dgp_p50", "dgp_p95", "dgp_max",
-                   "dgp_above_limit_share", "supply_air_below_min", "asymmetry_beyond_min")
+                   "dgp_above_limit_share", "supply_air_in_min", "supply_air_coldest_c",
+                   "supply_air_below_min", "asymmetry_beyond_min")
 
 
 def occupancy_for(name: str, panel: Occupancy | None) -> Occupancy | None:
@@ -115,8 +116,10 @@ def comfort_figures(log: ComfortLog, comfort: Comfort,
         ``occupied_min``; ``direct_sun_min`` (beam into the room above
         ``direct_sun_max_wm2``); ``dgp_p50``, ``dgp_p95``, ``dgp_max`` (over the occupied
         cycles, NaN without any) and ``dgp_above_limit_share`` (of the occupied cycles above
-        ``dgp_max``); ``supply_air_below_min`` (air entering the room colder than the supply
-        limit); ``asymmetry_beyond_min`` (warm or cool pane beyond ISO 7730's category limit).
+        ``dgp_max``); ``supply_air_in_min`` (cavity air entering the room at all) and
+        ``supply_air_coldest_c`` (NaN if none), ``supply_air_below_min`` (air entering the
+        room colder than the supply limit); ``asymmetry_beyond_min`` (warm or cool pane
+        beyond ISO 7730's category limit).
         All counts are in minutes of occupied cycles.
     """
     occ = np.asarray(log.occupied, bool)
@@ -136,6 +139,9 @@ def comfort_figures(log: ComfortLog, comfort: Comfort,
         out[name] = float(np.percentile(dgp, q)) if dgp.size else math.nan
     out["dgp_above_limit_share"] = float(np.mean(dgp > comfort.dgp_max)) if dgp.size \
         else math.nan
+    inflow = np.isfinite(air)
+    out["supply_air_in_min"] = float(np.sum(inflow) * minutes)
+    out["supply_air_coldest_c"] = float(air[inflow].min()) if inflow.any() else math.nan
     out["supply_air_below_min"] = float(np.sum(cold_air) * minutes)
     out["asymmetry_beyond_min"] = float(np.sum(beyond) * minutes)
     return out

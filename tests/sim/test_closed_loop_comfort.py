@@ -44,6 +44,7 @@ def test_the_figures_count_occupied_minutes_beyond_each_limit():
     assert fig["dgp_p95"] == pytest.approx(0.485)
     assert fig["dgp_max"] == 0.5 and fig["dgp_above_limit_share"] == 0.5
     assert fig["supply_air_below_min"] == 2.0  # 10 and 15 degC; no inflow is not cold
+    assert fig["supply_air_in_min"] == 3.0 and fig["supply_air_coldest_c"] == 10.0
     assert fig["asymmetry_beyond_min"] == 2.0
     # Two-minute cycles count double; ``keep`` limits the count to some cycles.
     twice = dataclasses.replace(log, step_s=120.0)
@@ -96,6 +97,7 @@ def test_an_office_morning_is_counted_from_eight_o_clock(monday):
         assert np.isfinite(result.comfort.dgp[10:]).all()
         # the dampers are shut: no air enters the room, so none is too cold
         assert np.isnan(result.comfort.supply_air_c).all() and s["supply_air_below_min"] == 0
+        assert s["supply_air_in_min"] == 0 and math.isnan(s["supply_air_coldest_c"])
 
 
 def test_closed_slats_keep_the_sun_out_and_open_ones_let_it_dazzle(monday):
