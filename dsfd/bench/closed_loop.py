@@ -25,6 +25,13 @@ per case is
 (1 = the controller gets everything the plant oracle gets). Days are picked from the
 weather by the daytime clearness index k_t of each whole local solar day
 (:func:`classify_days`).
+
+Comfort is measured on the plant while occupied (:mod:`dsfd.sim.comfort_kpis`): every case
+runs with the schedule ``occupancy`` names (default office hours 08:00-18:00 every day: the
+bundled January record's clear and overcast days are a Sunday and a Saturday at the Suwon
+site, so a weekdays-only office would judge only the mixed day), and reports per controller
+the occupied minutes with direct sun, the DGPs distribution and its share above the limit, the
+minutes with supply air below the limit and with the pane's asymmetry beyond the category.
 """
 
 from __future__ import annotations
@@ -39,13 +46,14 @@ import numpy as np
 from dsfd.bench.oracle_cache import OracleCache, config_digest
 from dsfd.config.panel import PanelConfig
 from dsfd.physics.solar import extraterrestrial_irradiance, solar_position
-from dsfd.sim.choices import BENCH_CONTROLLERS
+from dsfd.sim.choices import BENCH_CONTROLLERS, OccupancyName
 from dsfd.sim.closed_loop import (
     J_PER_KWH,
     ClosedLoopResult,
     ClosedLoopSettings,
     run_closed_loop,
 )
+from dsfd.sim.comfort_kpis import COMFORT_FIGURES, occupancy_for, weekly_hours
 from dsfd.sim.plant.faults import FaultSpec
 from dsfd.sim.replay import at_site
 from dsfd.weather import WeatherSeries
@@ -112,6 +120,7 @@ def classify_days(series: WeatherSeries, cfg: PanelConfig) -> dict[str, DayClass
 
 def _case_config(cfg: PanelConfig, series: WeatherSeries, season: str
                  ) -> tuple[PanelConfig, WeatherSeries]:
+    """The panel and weather of a season (the panel's occupancy already chosen)."""
     if season == "heating":
         return (dataclasses.replace(cfg, control=dataclasses.replace(cfg.control,
                                                                      mode="heating")), series)
@@ -135,6 +144,8 @@ def _scored(result: ClosedLoopResult, from_s: float) -> dict[str, float]:
     d = result.decide_ms[keep]
     d = d[np.isfinite(d)]
     out["decide_ms_median"] = float(np.median(d)) if d.size else float("nan")
+    comfort = result.comfort_summary(keep)
+    out.update((k, comfort[k]) for k in COMFORT_FIGURES if k in comfort)
     return out
 
 
@@ -149,7 +160,8 @@ def bench_closed_loop(cfg: PanelConfig, series: WeatherSeries, *, days: float = 
                       progress: Callable[[str], None] | None = None,
                       on_figures: Callable[[dict[str, float]], None] | None = None,
                       oracle_cache: OracleCache | None = None,
-                      faults: tuple[FaultSpec, ...] = ()) -> dict[str, float]:
+                      faults: tuple[FaultSpec, ...] = (),
+                      occupancy: OccupancyName = "office-every-day") -> dict[str, float]:
     """Run every controller on every case; flat figures ``<case>.<controller>.<figure>``
     and ``<case>.mpc_share_of_plant_oracle_saving`` (and the other shares) when ``rule`` and
     ``plant-oracle`` are among ``controllers`` (a run of some controllers alone, e.g. to add
@@ -160,17 +172,21 @@ def bench_closed_loop(cfg: PanelConfig, series: WeatherSeries, *, days: float = 
     (``<case>.plant-oracle.cached`` = 1) and stored in it where it does not. ``faults``
     (:mod:`dsfd.sim.plant.faults`, relative starts from each case's run start, warm-up
     included) are in every controller's plant; the cache, which knows clean plants only, is
-    then not used."""
+    then not used. ``occupancy`` names the schedule every case runs with
+    (:data:`~dsfd.sim.comfort_kpis.OCCUPANCY_CHOICES`; ``panel``: the panel's own); the
+    comfort limits are the panel's ``comfort:``."""
     unknown = sorted(set(cases) - set(CASES))
     if unknown:
         raise ValueError(f"unknown case(s) {unknown}; choose from {', '.join(CASES)}")
     unknown = sorted(set(controllers) - set(CONTROLLERS))
     if unknown:
         raise ValueError(f"unknown controller(s) {unknown}; choose from {', '.join(CONTROLLERS)}")
+    cfg = dataclasses.replace(cfg, occupancy=occupancy_for(occupancy, cfg.occupancy))
     skies = classify_days(series, cfg)
     first = at_site(series, cfg).coverage_s[0]
     fig: dict[str, float] = {"seed": float(seed), "days": float(days),
-                             "faults": float(len(faults))}
+                             "faults": float(len(faults)),
+                             "occupied_h_per_week": weekly_hours(cfg.occupancy)}
     if faults:
         oracle_cache = None
     for case in cases:
@@ -237,7 +253,28 @@ def report(fig: dict[str, float]) -> str:
                          f"{fig[p + 'q_sol_trans_kwh']:9.3f}{fig[p + 'q_air_kwh']:9.3f}"
                          f"{fig[p + 'q_da_kwh']:9.3f}{fig[p + 'louver_moves_per_day']:9.1f}"
                          + (f"{share:8.1%}" if share is not None else f"{'':>8}"))
+        lines += _comfort_rows(fig, case, names)
     return "\n".join(lines)
+
+
+def _comfort_rows(fig: dict[str, float], case: str, names: Sequence[str]) -> list[str]:
+    """The case's comfort table: occupied minutes beyond each limit, DGPs distribution."""
+    rows = [f"{name:<18}" + "".join(_cell(fig.get(f"{case}.{name}.{k}"), fmt) for k, fmt in (
+        ("occupied_min", "9.0f"), ("direct_sun_min", "9.0f"), ("dgp_p50", "7.2f"),
+        ("dgp_p95", "7.2f"), ("dgp_max", "7.2f"), ("dgp_above_limit_share", "8.0%"),
+        ("supply_air_in_min", "8.0f"), ("supply_air_below_min", "9.0f"),
+        ("asymmetry_beyond_min", "9.0f")))
+        for name in names if f"{case}.{name}.occupied_min" in fig]
+    if not rows:
+        return []
+    return [f"{'comfort (plant)':<18}{'occupied':>9}{'sun':>9}{'DGP50':>7}{'DGP95':>7}"
+            f"{'DGPmax':>7}{'>DGPlim':>8}{'air in':>8}{'cold air':>9}{'asymm.':>9}  [min]",
+            *rows]
+
+
+def _cell(value: float | None, fmt: str) -> str:
+    width = int(fmt.split(".")[0])
+    return f"{'-':>{width}}" if value is None or not np.isfinite(value) else f"{value:{fmt}}"
 
 
 

@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from dsfd.config import ConfigError, load_panel
-from dsfd.sim.choices import BENCH_CONTROLLERS
+from dsfd.sim.choices import BENCH_CONTROLLERS, OCCUPANCY_CHOICES
 
 DEFAULT_PANEL = Path("config/panels/suwon-south.yaml")
 
@@ -134,7 +134,8 @@ def _bench_closed_loop(args: argparse.Namespace) -> dict[str, float]:
         on_figures=None if args.json is None else lambda fig: _write_json(
             args.json, args.target, {**fig, "partial": 1.0}),
         oracle_cache=None if args.oracle_cache is None else OracleCache(args.oracle_cache),
-        faults=tuple(parse_fault(f) for f in args.fault))
+        faults=tuple(parse_fault(f) for f in args.fault),
+        occupancy=args.occupancy or "office-every-day")
     cfg = load_panel(args.config)
     series = load_weather(args.weather or "rmis-golden-2022-01")
     if args.seeds is None:
@@ -244,6 +245,12 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="closed-loop: a slow fault of the truth plant, START relative to "
                    "each case's run start (warm-up included) or ISO UTC (repeatable; grammar "
                    "in docs/faults.md#simulated-faults)")
+    p.add_argument("--occupancy", choices=OCCUPANCY_CHOICES, default=None,
+                   help="closed-loop: the schedule comfort is judged by (default "
+                   "office-every-day: 08:00-18:00 local every day; office-weekdays: Monday to "
+                   "Friday, which leaves the bundled record's clear and overcast days, a "
+                   "Sunday and a Saturday at the Suwon site, unoccupied; panel: the panel's "
+                   "occupancy:; none)")
     p.add_argument("--plant", choices=("lumped", "truth"), default=None,
                    help="identify: lumped = the lumped-equivalent plant (the model's structure, "
                    "true parameters known; default), truth = the full-fidelity truth plant")

@@ -159,6 +159,8 @@ def run(args: argparse.Namespace, cfg: PanelConfig, series: WeatherSeries,
         print(f"  {name:<9}{row['cycles']:6d} cycles, mean louver {row['phi_deg_mean']:+6.1f} "
               f"deg; regimes {shares}{extra}")
     print(f"calibration updates: {s['calibration_updates']}")
+    for line in comfort_lines(s["comfort"], scheduled=cfg.occupancy is not None):
+        print(line)
     print(f"wall time: {s['wall_s']:.1f} s")
     if args.json:
         args.json.parent.mkdir(parents=True, exist_ok=True)
@@ -168,6 +170,27 @@ def run(args: argparse.Namespace, cfg: PanelConfig, series: WeatherSeries,
         args.json.write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
         print(f"wrote {args.json}")
     return 0
+
+
+def comfort_lines(c: dict, *, scheduled: bool) -> list[str]:
+    """The comfort figures of a closed-loop summary (``summary()["comfort"]``) as text."""
+    head = "comfort on the plant while occupied (docs/model.md#plant-comfort):"
+    if not scheduled:
+        return [head, "  the panel has no occupancy: schedule: never occupied, nothing judged"]
+    if not c.get("occupied_min"):
+        return [head, "  no occupied minute in the run"]
+    return [head,
+            f"  occupied {c['occupied_min']:.0f} min; direct sun above "
+            f"{c['direct_sun_limit_wm2']:g} W/m2: {c['direct_sun_min']:.0f} min",
+            f"  DGPs p50 {c['dgp_p50']:.2f}, p95 {c['dgp_p95']:.2f}, max {c['dgp_max']:.2f}; "
+            f"above {c['dgp_limit']:g} in {c['dgp_above_limit_share']:.0%} of occupied minutes",
+            f"  cavity air into the room {c['supply_air_in_min']:.0f} min"
+            + (f" (coldest {c['supply_air_coldest_c']:.1f} degC)" if c["supply_air_in_min"]
+               else "") + "; below the supply limit "
+            f"{c['supply_air_limit_c']:.1f} degC: {c['supply_air_below_min']:.0f} min",
+            f"  radiant asymmetry beyond "
+            f"{c['asymmetry_limit_warm_k']:g} K warm / {c['asymmetry_limit_cool_k']:g} K cool: "
+            f"{c['asymmetry_beyond_min']:.0f} min"]
 
 
 def write_closed_loop_report(state_dir: Path, cfg: PanelConfig, out: Path) -> None:

@@ -1,4 +1,4 @@
-"""The report's six figures, each with a title that says what it shows, units on its axes
+"""The report's seven figures, each with a title that says what it shows, units on its axes
 and local standard time on its time axes. A time series is broken (not bridged by a line)
 where cycles are missing, and every figure draws a readable "nothing to show" note instead of
 an empty or failing plot when its data are absent (a one-hour log, a day without sun, an old
@@ -17,6 +17,8 @@ from matplotlib.ticker import MaxNLocator, NullFormatter
 
 from dsfd.config.panel import REGIME_NAMES
 from dsfd.physics.solar import solar_position
+from dsfd.report.comfort_figure import CAPTION as COMFORT_CAPTION
+from dsfd.report.comfort_figure import comfort_figure
 from dsfd.report.kpis import HEAT_TERMS, STATES, Kpis, PredictionErrors, zone_name
 from dsfd.report.plotting import (
     HEAT_COLOURS,
@@ -348,6 +350,7 @@ FIGURES: Sequence[tuple[str, str, str, Callable[[Context], Figure]]] = (
     ("fig-controls", "Control (cf. paper Figs. 10 and 11)",
      "The position in effect each cycle (the command, or the position read back when nothing "
      "was written), who decided it, and the measured weather.", controls_figure),
+    ("fig-comfort", "Occupant comfort: glare and sun cut-off", COMFORT_CAPTION, comfort_figure),
     ("fig-regimes-sky", "Regimes by sky condition",
      "Airflow regime shares per sky condition, classified from the measured global "
      "irradiance by the clearness index.", regimes_by_sky_figure),

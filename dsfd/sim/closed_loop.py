@@ -51,6 +51,7 @@ from pathlib import Path
 
 import numpy as np
 
+from dsfd.config.comfort import Comfort
 from dsfd.config.panel import PanelConfig
 from dsfd.config.parameters import N_PARAMS
 from dsfd.control.objective import is_heating
@@ -68,6 +69,7 @@ from dsfd.sim.choices import (
     CalibrationName,
     ControllerName,
 )
+from dsfd.sim.comfort_kpis import ComfortLog, comfort_summary
 from dsfd.sim.oracle_controllers import (
     CONTROLLER_CLASSES,
     FrozenCalibration,
@@ -175,6 +177,16 @@ class ClosedLoopResult:
     #: Stages slower than the panel's budgets (lifted in a run, see SIM_BUDGET_S).
     late: dict[str, int] = field(default_factory=dict)
     notes: tuple[str, ...] = field(default_factory=tuple)
+    #: Occupancy and the plant's comfort quantities per cycle, and the limits they are
+    #: judged by (docs/model.md#plant-comfort).
+    comfort: ComfortLog | None = None
+    comfort_limits: Comfort = field(default_factory=Comfort)
+
+    def comfort_summary(self, keep: np.ndarray | None = None) -> dict[str, float]:
+        """:func:`~dsfd.sim.comfort_kpis.comfort_summary` of the run (``keep``: the cycles to
+        count); empty without a comfort log."""
+        return {} if self.comfort is None else comfort_summary(self.comfort,
+                                                               self.comfort_limits, keep)
 
     @property
     def cycles(self) -> int:
@@ -246,6 +258,7 @@ class ClosedLoopResult:
             "by_condition": self.by_condition(*self.site),
             "final_theta": [float(v) for v in self.final_theta[:N_PARAMS]],
             "wall_s": self.wall_s,
+            "comfort": self.comfort_summary(),
             "notes": list(self.notes),
         }
 
@@ -352,6 +365,7 @@ async def _run(cfg: PanelConfig, plant: Plant, settings: ClosedLoopSettings, sta
     decide_ms: list[float] = []
     updates = 0
     late: Counter[str] = Counter()
+    comfort = ComfortLog.empty(cfg.model.step_s)
     wall = time.perf_counter()
     try:
         for i in range(n):
@@ -375,6 +389,7 @@ async def _run(cfg: PanelConfig, plant: Plant, settings: ClosedLoopSettings, sta
             # behind), so the room heat of each interval is attributed to its command.
             for k in ROOM_FLOWS:
                 heat[k].append(after[k] - before[k])
+            comfort.record(plant)
             station = plant.station_weather()
             if mode is None:  # no controller decided a mode: the panel's rule, as the loop
                 mode = is_heating(cfg.control, station["t_out_c"] + T_ZERO)
@@ -394,7 +409,7 @@ async def _run(cfg: PanelConfig, plant: Plant, settings: ClosedLoopSettings, sta
         ghi_wm2=np.asarray(ghi, float),
         commands=commands, methods=methods, decide_ms=np.asarray(decide_ms, float),
         calibration_updates=updates, final_theta=calibration.theta, late=dict(late),
-        wall_s=time.perf_counter() - wall,
+        wall_s=time.perf_counter() - wall, comfort=comfort, comfort_limits=cfg.comfort,
         site=(cfg.site.latitude_deg, cfg.site.longitude_deg),
         notes=(f"truth plant seed {settings.seed}; true h multipliers "
                + ", ".join(f"{m:.2f}" for m in plant.params.h_multipliers)

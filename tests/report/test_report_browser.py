@@ -40,7 +40,7 @@ def test_the_report_is_one_self_contained_file_with_every_figure(faulted_run):
     html = faulted_run.html.read_text()
     for fig_id, *_ in FIGURES:
         assert html.count(f'<figure id="{fig_id}">') == 1, fig_id
-    assert html.count("<img ") == len(FIGURES) == 6
+    assert html.count("<img ") == len(FIGURES) == 7
     # Nothing to fetch: every src is inline data, every link an anchor in the page.
     assert re.findall(r'(?:src|href)="(?!data:image/png;base64,|#)', html) == []
     assert "<script" not in html and "http://" not in html and "https://" not in html

@@ -87,7 +87,7 @@ def test_report_options_and_errors(faulted_run, tmp_path, capsys):
     panel = write_panel(tmp_path / "p.yaml", devices=False,
                         extra={"daemon": {"state_directory": str(faulted_run.state_dir)}})
     assert main(["report", "--config", str(panel), "--out", str(out), "--dpi", "30"]) == 0
-    assert out.read_text().count("<img ") == 6
+    assert out.read_text().count("<img ") == 7
     other = write_panel(tmp_path / "q.yaml", devices=False, extra={
         "panel": {"id": "north"}, "daemon": {"state_directory": str(faulted_run.state_dir)}})
     assert main(["export", "--config", str(other), "--out", str(tmp_path / "m.csv")]) == 2

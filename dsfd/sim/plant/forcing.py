@@ -196,8 +196,19 @@ def _knots_lumped(cfg: PanelConfig, options: PlantOptions, w: WeatherInputs,
                   f.beam_wm2 + f.diffuse_wm2)
 
 
-def _knots_fine(cfg: PanelConfig, options: PlantOptions, w: WeatherInputs,
-                phis_rad: np.ndarray, louver: LouverOptics | None) -> _Knots:
+class FineIrradiance(NamedTuple):
+    """Irradiance on the façade plane of the plant's fine optics [W/m2] and the sun's angles."""
+
+    beam: np.ndarray
+    sky: np.ndarray
+    ground: np.ndarray
+    cos_aoi: np.ndarray
+    profile_rad: np.ndarray
+
+
+def fine_irradiance(cfg: PanelConfig, w: WeatherInputs) -> FineIrradiance:
+    """The façade irradiance of ``optics: fine`` (docs/model.md#plant-forcing): the measured
+    DNI/DHI where the record has both (else DIRINT), transposed with Perez 1990."""
     site, fac = cfg.site, cfg.facade
     sun = solar_position(w.time_s, site.latitude_deg, site.longitude_deg)
     dni_extra = extraterrestrial_irradiance(w.time_s)
@@ -216,11 +227,17 @@ def _knots_fine(cfg: PanelConfig, options: PlantOptions, w: WeatherInputs,
     fi = facade_irradiance(dni=dni, dhi=dhi, ghi=ghi, zenith_deg=sun.zenith_deg,
                            azimuth_deg=sun.azimuth_deg, surface_azimuth_deg=fac.azimuth_deg,
                            albedo=site.albedo, dni_extra=dni_extra, model="perez")
-    sky = np.nan_to_num(fi.sky_diffuse)
-    ground = fi.ground_diffuse
-    sol = layer_absorption(beam=fi.beam, diffuse=sky + ground,
-                           cos_aoi=np.cos(np.radians(fi.aoi_deg)), phi=phis_rad[:, None],
-                           profile=np.radians(fi.profile_deg),
+    return FineIrradiance(fi.beam, np.nan_to_num(fi.sky_diffuse), fi.ground_diffuse,
+                          np.cos(np.radians(fi.aoi_deg)), np.radians(fi.profile_deg))
+
+
+def _knots_fine(cfg: PanelConfig, options: PlantOptions, w: WeatherInputs,
+                phis_rad: np.ndarray, louver: LouverOptics | None) -> _Knots:
+    site, fac = cfg.site, cfg.facade
+    fi = fine_irradiance(cfg, w)
+    sky, ground = fi.sky, fi.ground
+    sol = layer_absorption(beam=fi.beam, diffuse=sky + ground, cos_aoi=fi.cos_aoi,
+                           phi=phis_rad[:, None], profile=fi.profile_rad,
                            glass=glass_triples(cfg.glazing, band="solar"),
                            louver=NO_LOUVER if louver is None else louver,
                            diffuse_ground=ground)

@@ -35,6 +35,7 @@ from dsfd.sim.plant.actuators import (
     damper_mask,
     validate_command,
 )
+from dsfd.sim.plant.comfort import PlantComfort, PlantComfortMeter
 from dsfd.sim.plant.config import PlantOptions, TrueParameters, drift_factors
 from dsfd.sim.plant.faults import FaultSpec, PlantFaults
 from dsfd.sim.plant.flow import NETWORK, PAIR, FlowPiece, reg_coefficients
@@ -120,6 +121,7 @@ class Plant:
                                                rate_degs=opt.louver_rate_degs,
                                                rise_time_s=opt.damper_rise_time_s)
         self._t: float | None = None
+        self._comfort: PlantComfortMeter | None = None
         self.stats = PlantStats()
 
     # ------------------------------------------------------------------ boundary
@@ -139,6 +141,13 @@ class Plant:
         if self._t is None:
             raise RuntimeError("call Plant.reset(start_s) first")
         return self._t
+
+    @property
+    def start_s(self) -> float:
+        """UTC start of the run (the last :meth:`reset`) [s]."""
+        if self._t is None:
+            raise RuntimeError("call Plant.reset(start_s) first")
+        return self._t0
 
     @property
     def command(self) -> Command:
@@ -332,6 +341,13 @@ class Plant:
             self._eval_t = t
             self._eval = self.model.last
         return self._eval
+
+    def comfort(self) -> PlantComfort:
+        """Direct sun, glare, supply air and radiant asymmetry now, from the plant's own
+        optics and air paths (docs/model.md#plant-comfort)."""
+        if self._comfort is None:
+            self._comfort = PlantComfortMeter(self)
+        return self._comfort.measure(self, self._evaluate())
 
     def true_state(self) -> TrueState:
         """All segment temperatures, flows, the realised label and the mid-height states."""
