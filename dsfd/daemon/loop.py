@@ -131,7 +131,6 @@ class Controller:
         t["quality"] = _ms(mark)
 
         held = self._hold_update(slot, now_s, got)
-        hold = held.hold
         occupancy = self.manual.occupancy.resolve(self.cfg, checked, report.flags, now_s=now_s)
         # While held, the positions read back are what the panel got.
         current = got.read_back or self.io.expected or self.io.last_written
@@ -147,12 +146,11 @@ class Controller:
         mark = time.perf_counter()
         objective, objective_by = self.manual.objective_mode
         heating, forecast = self._outlook(weather, objective, now_s)
-        occupied_steps = self._occupancy_profile(now_s, self.cfg.control.horizon_steps,
-                                                 checked)
-        if hold is None:
+        if held.hold is None:
             decision, method, fallback, no_decision = await self._decide(
                 weather, estimate, current, checked, forecast, heating=bool(heating),
-                occupancy=occupied_steps)
+                occupancy=self._occupancy_profile(now_s, self.cfg.control.horizon_steps,
+                                                  checked))
         else:  # a person has the panel: nothing to optimise
             decision, method, fallback, no_decision = None, "manual", "", ""
         t["decide"] = _ms(mark)
@@ -161,7 +159,7 @@ class Controller:
         ctx = SafetyContext(now_s=self.clock.monotonic(),
                             wind_speed_ms=checked.good("wind_speed_ms"),
                             bad_signals=frozenset(report.flags), current=current,
-                            no_decision_reason=no_decision, hold=hold)
+                            no_decision_reason=no_decision, hold=held.hold)
         safe = self.safety.apply(None if decision is None else _command_or_none(decision), ctx)
         if safe.faulted:  # the faults stage replaced the decision
             method = "safe"
@@ -188,7 +186,7 @@ class Controller:
             calibration=calibration, timings_ms=t, manual_override=bool(held.moved),
             estimate=estimate, applied=applied, horizon_x_k=horizon_x,
             horizon_s=self.cfg.control.horizon_steps * self.cfg.model.step_s,
-            plant_heat_j=plant_heat, hold=hold, objective_mode=objective,
+            plant_heat_j=plant_heat, hold=held.hold, objective_mode=objective,
             mode_command_id=objective_by,
             run_elapsed_s=round(slot.deadline_s - self._grid0_s, 6),
             events=[*events, *held.events, *_drain(self.calibration.events)],
