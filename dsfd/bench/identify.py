@@ -173,6 +173,7 @@ def seed_figures(trace: SeedTrace) -> dict[str, float]:
         if z_err is not None:
             out[f"{name}.err_over_post_sd_last_day_median"] = _median(z_err[:, i])
         out[f"{name}.fixed"] = float(bool(sp.fixed[i]))
+        out[f"{name}.truth_on_bound"] = float(name in trace.truth_on_bound)
         out[f"{name}.determined"] = float(not sp.fixed[i] and ratio[i] < DETERMINED_SD_RATIO)
         kind = "wm2" if offset else "rel"
         for k in range(changes.shape[0]):

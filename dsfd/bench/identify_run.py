@@ -51,7 +51,7 @@ from dsfd.daemon.runner import RunOptions, serve
 from dsfd.daemon.weather import CycleWeather
 from dsfd.drivers.base import Command as DriverCommand
 from dsfd.drivers.base import Sample
-from dsfd.estimation.params import ParameterSpace
+from dsfd.estimation.params import PARAMETER_NAMES, ParameterSpace
 from dsfd.estimation.state import CalibrationState
 from dsfd.physics.forcing import Forcing
 from dsfd.report.kpis import PredictionErrors, prediction_errors, report_step_s
@@ -136,6 +136,22 @@ class SeedTrace:
     errors_time_s: np.ndarray
     step_s: float
     counts: dict[str, float]
+    #: Parameters whose value on the plant lies on a calibration bound by construction
+    #: (:func:`truth_on_bound`): a share of cycles there is the right answer, not a failure.
+    truth_on_bound: tuple[str, ...] = ()
+
+
+def truth_on_bound(options: PlantOptions, space: ParameterSpace) -> tuple[str, ...]:
+    """Parameters the plant's own structure puts on a calibration bound.
+
+    The full truth plant drives its diagonal paths (regimes 5–8) as orifices
+    (``PlantOptions.diagonal_flow == "orifice"``, docs/model.md#plant-airflow): flow ∝ Δp^½,
+    which is the power law Q = c Δp^n at n = ½, the lower bound of n (the turbulent limit).
+    The model's n is then right at that bound."""
+    i = PARAMETER_NAMES.index("n")
+    if options.diagonal_flow == "orifice" and abs(space.lower[i] - 0.5) < 1e-9:
+        return ("n",)
+    return ()
 
 
 class ScheduleController(Controller):
@@ -286,7 +302,8 @@ def run_seed(spec: RunSpec, seed: int, *, progress: Callable[[str], None] | None
                   wall_s=time.perf_counter() - wall0)
     return SeedTrace(seed=seed, time_s=recorder.time_s, theta=recorder.theta,
                      sd_ratio=recorder.sd_ratio, truth=truth, space=space, errors=errors,
-                     errors_time_s=history.time_s, step_s=step_s, counts=counts)
+                     errors_time_s=history.time_s, step_s=step_s, counts=counts,
+                     truth_on_bound=truth_on_bound(options, space) if truth is None else ())
 
 
 def _controller_factory(cfg: PanelConfig, spec: RunSpec, start_s: float, seed: int

@@ -31,7 +31,13 @@ from dsfd.bench.identify import (
     relative_error,
     seed_figures,
 )
-from dsfd.bench.identify_run import RunSpec, SeedTrace, plant_options_for, run_seed
+from dsfd.bench.identify_run import (
+    RunSpec,
+    SeedTrace,
+    plant_options_for,
+    run_seed,
+    truth_on_bound,
+)
 from dsfd.bench.identify_targets import issue_targets
 from dsfd.cli import main
 from dsfd.config import load_panel
@@ -39,6 +45,7 @@ from dsfd.config.parameters import FIT_NAMES, N_PARAMS, PARAMETER_NAMES
 from dsfd.estimation.params import ParameterSpace
 from dsfd.report.kpis import PredictionErrors
 from dsfd.sim.daemon_plant import simulated_plant
+from dsfd.sim.plant.config import PlantOptions
 from dsfd.sim.protocol import paper_protocol
 from dsfd.storage.history import read_history
 from tests.daemon.harness import ROOT, write_panel
@@ -288,6 +295,15 @@ def test_closed_loop_on_the_truth_plant_is_the_daemons_own_decisions_and_knows_n
     figs = seed_figures(trace)
     assert not any(k.endswith((".true", ".rel_err_last")) for k in figs)
     assert figs["h_out.at_bound_pct"] == 0.0  # the priors, 10 cycles before any update
+    # the full plant's diagonal paths are orifices, Q ∝ Δp^½: its n is the bound 0.5
+    assert figs["n.truth_on_bound"] == 1.0
+    assert sum(v for k, v in figs.items() if k.endswith(".truth_on_bound")) == 1.0
+
+
+def test_only_an_orifice_plant_puts_n_on_its_bound(suwon):
+    space = ParameterSpace.from_panel(suwon)
+    assert truth_on_bound(PlantOptions(), space) == ("n",)
+    assert truth_on_bound(PlantOptions(diagonal_flow="power_law"), space) == ()
 
 
 def test_the_issue_targets_name_each_offender():
@@ -319,6 +335,13 @@ def test_the_issue_targets_name_each_offender():
     out, lines = issue_targets(truth, [0], plant="truth")
     assert out["target.model_below_persistence"] == 0.0
     assert "NOT met: seed 0 x5 h15" in "\n".join(lines)
+    # a parameter whose plant value lies on the bound is named apart, not as an offender
+    truth.update({"seed0.n.at_bound_pct": 57.0, "seed0.n.truth_on_bound": 1.0,
+                  "seed0.h_ca4.at_bound_pct": 64.0})
+    out, lines = issue_targets(truth, [0], plant="truth")
+    assert out["target.at_bound_le_10pct"] == 0.0
+    assert "NOT met: seed 0 h_ca4 64.0 %" in lines[1] and "n" not in lines[1].split(":")[1]
+    assert "on or beyond it: seed 0 n 57.0 %" in lines[-1]
 
 
 def test_a_stopped_run_keeps_the_seeds_it_finished(panel, tmp_path):
