@@ -168,10 +168,11 @@ class ScheduleController(Controller):
 
     async def _decide(self, weather: CycleWeather, estimate: StateEstimate,
                       current: DriverCommand | None, checked: Sample, forecast: Forcing | None,
-                      *, heating: bool) -> tuple[Decision | None, str, str, str]:
+                      *, heating: bool, occupancy: np.ndarray
+                      ) -> tuple[Decision | None, str, str, str]:
         if weather.inputs is None or weather.forcing is None or forecast is None:
             return await super()._decide(weather, estimate, current, checked, forecast,
-                                         heating=heating)
+                                         heating=heating, occupancy=occupancy)
         cmd = self.schedule.at(self.clock.wall())
         return (Decision(phi_deg=cmd.phi_deg, afr=cmd.afr, or_pct=cmd.or_pct,
                          method="protocol", cost_j=math.nan,

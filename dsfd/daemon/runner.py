@@ -171,7 +171,9 @@ class _Daemon:
                 continue  # then wait for the same slot
             with bound_contextvars(cycle=self.controller.cycles + 1):
                 await self.one_cycle(slot)
-            if self.opts.cycles is not None and self.summary.cycles >= self.opts.cycles:
+            # a failed cycle counts too: a cycle that always fails must not run a dry run forever
+            done = self.summary.cycles + self.cycle_failures
+            if self.opts.cycles is not None and done >= self.opts.cycles:
                 return "cycles done"
             if self.stop.is_set():
                 return "signal"

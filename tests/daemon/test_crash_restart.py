@@ -14,6 +14,10 @@ import signal
 import sqlite3
 from pathlib import Path
 
+from dsfd.config import load_panel
+from dsfd.daemon.loop import Controller
+from dsfd.daemon.runner import RunOptions, serve
+from dsfd.sim.daemon_plant import simulated_plant
 from tests.daemon.harness import MORNING_ISO, DaemonProcess, query, write_panel
 
 
@@ -111,3 +115,21 @@ def test_a_database_of_a_newer_dsfd_is_refused_and_left_as_it_is(tmp_path: Path)
     assert "schema version 999" in daemon.stderr and "newer dsfd" in daemon.stderr
     assert db.read_bytes() == before
     assert not list(state.glob("timeseries.sqlite.corrupt.*"))
+
+
+def test_a_dry_run_whose_every_cycle_fails_still_stops_after_its_cycles(tmp_path):
+    """``--cycles N`` counts failed cycles too: a cycle that raises every time (a bug) is
+    logged and the dry run ends after N of them instead of running forever."""
+    class Broken(Controller):
+        async def _decide(self, *args, **kwargs):
+            raise RuntimeError("a bug in the decision")
+
+    panel = write_panel(tmp_path / "panel.yaml", devices=False)
+    cfg = load_panel(panel)
+    sim = simulated_plant(cfg, cycles=3, seed=1)
+    opts = RunOptions(config_path=panel, dry_run=True, plant="sim", plant_fidelity="lumped",
+                      cycles=3, seed=1, controller=Broken)
+    summary = asyncio.run(asyncio.wait_for(
+        serve(opts, cfg, state_dir=tmp_path / "state", plant=sim, print_line=lambda _l: None),
+        timeout=120))
+    assert summary.cycles == 0  # none completed, and the run ended
