@@ -28,7 +28,7 @@ YAML shape (every key optional; the defaults suit a 1-minute controller cycle)::
       broyden_updates: 1          # Broyden Jacobian updates between finite differences
       identifiability_sd_ratio: 1.0  # < 1: a parameter moves only where the window determines it
       measurement_gain: [1, 0.3, 0.3, 1, 1]  # state update: weight of a reading of x1..x5
-      reading_offset_tracking_s: [0, 0, 0, 300, 300]  # per-regime reading offsets of x1..x5
+      reading_offset_tracking_s: [0, 0, 0, 120, 120]  # per-regime reading offsets of x1..x5
       reading_offset_memory_s: 3600   # ... decay of a regime's offsets while it is not applied
       spike_threshold_k: 3.0      # isolated temperature jumps treated as missing
       fixed: []                   # parameters never calibrated on this panel
@@ -142,7 +142,7 @@ class Calibration:
         "their one-step model error is far below the 0.2 K thermocouple noise, and a 300 s "
         "low-pass let that noise walk their offsets", unit="s", ge=0, le=86400)
     reading_offset_tracking_s: tuple[float, ...] = setting(
-        (0.0, 0.0, 0.0, 300.0, 300.0), doc="Time constant of the reading offsets of x1..x5 "
+        (0.0, 0.0, 0.0, 120.0, 120.0), doc="Time constant of the reading offsets of x1..x5 "
         "(one per sensor; 0: none): the output-disturbance model of the daemon's state "
         "update. Per commanded airflow regime, each offset follows the difference between the "
         "reading and the model's one-step prediction through a first-order low-pass; the "
