@@ -100,8 +100,8 @@ class OccupancyStage:
 
     def _log_signal(self, problem: str | None) -> None:
         if problem is not None and problem != self._signal_problem:
-            log.warning("occupied signal not usable (%s): the occupancy schedule decides "
-                        "until it is GOOD again", problem)
+            log.warning(f"occupied signal not usable ({problem}): the occupancy schedule "
+                        "decides until it is GOOD again", problem=problem)
         elif problem is None and self._signal_problem is not None:
             log.info("occupied signal GOOD again: it decides the occupancy (unless an "
                      "operator override is in force)")
