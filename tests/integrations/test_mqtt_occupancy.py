@@ -6,7 +6,8 @@ The simulated morning is Sunday 2022-01-02 08:30 in Suwon (UTC+9) and the panel'
 says Sundays 08:00-18:00, so before any command the room is occupied by the schedule:
 
 1. ``unoccupied until 10:00`` makes the room unoccupied from the cycle that applies it
-   (source ``override``, until 10:00 local = 01:00 UTC), and ``dsfd status`` shows it;
+   (source ``override``, until 10:00 local = 01:00 UTC), the next decisions are taken
+   without the comfort limits, and ``dsfd status`` shows it;
 2. malformed occupancy commands (a wrong state, an impossible time, a time missing, JSON of
    the wrong shape) are answered on ``<base>/error``, filed nowhere, and change nothing;
 3. ``auto`` ends the override: the schedule decides again;
@@ -144,6 +145,19 @@ def test_an_occupancy_command_over_mqtt_changes_the_next_cycles_occupancy(
         why = occupancy_trace(dec[c][3])
         assert why["set"] == {"occupied": False, "source": "override"}
         assert "2022-01-02T01:00:00Z" in why["why"]
+    # The decision follows: the optimiser's problem carries the comfort limits over the
+    # occupied horizon steps before the command, none while the override says unoccupied.
+    def limits_in_decision(c: int) -> bool:
+        decide = [t for t in dec[c][3] if t["stage"].startswith("decide:")]
+        return bool(decide) and "steps occupied" in decide[0]["why"]
+
+    optimised = [c for c in range(1, auto["cycle"])
+                 if any(t["stage"] == "decide:mpc" for t in dec[c][3])]
+    before = [c for c in optimised if c < first["cycle"]]
+    during = [c for c in optimised if c >= first["cycle"]]
+    assert before and during, (before, during)
+    assert all(limits_in_decision(c) for c in before)
+    assert not any(limits_in_decision(c) for c in during)
     # The malformed ones changed nothing (the cycles during them kept the override)...
     assert all(occ[c] == (0, "override") for c in range(seen["before_bad"],
                                                         seen["after_bad"] + 1))
