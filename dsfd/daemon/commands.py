@@ -201,12 +201,17 @@ def occupancy_request(text: str) -> dict[str, Any]:
     return request
 
 
+_MAX_ROWID = 2**63 - 1
+
+
 def _finding_id(value: Any) -> int:
-    """A finding id: a positive whole number (digits in a string too: a CLI argument)."""
-    if isinstance(value, str) and value.strip().isdigit():
+    """A finding id: a whole number from 1 to SQLite's largest integer (digits in a string
+    too: a CLI argument)."""
+    if isinstance(value, str) and value.strip().isdigit() and len(value.strip()) <= 19:
         value = int(value.strip())
     if isinstance(value, bool) or not isinstance(value, int | float) or value != value \
-            or value in (math.inf, -math.inf) or value != int(value) or value < 1:
+            or value in (math.inf, -math.inf) or value != int(value) \
+            or not 1 <= value <= _MAX_ROWID:
         raise CommandError("finding", value, "expected the id of a finding, a whole number "
                            "from 1 (dsfd status lists the open ones)")
     return int(value)
