@@ -61,14 +61,14 @@ DAMPER_SHORT = {"exterior_bottom": "EB", "exterior_top": "ET", "interior_bottom"
 #: The outputs whose one-step prediction errors are watched: (reading, prediction, unit).
 _RESIDUALS = (*((f"x{i}_c", f"pred_x{i}_c", "K") for i in range(1, 6)),
               ("v_cav_ms", "pred_v_cav_ms", "m/s"))
-_SIGNALS = ("v_cav_ms", "x5_c", "t_room_c", "t_out_c", *(f"x{i}_c" for i in range(1, 5)))
+_SIGNALS = ("v_cav_ms", "x5_c", "t_room_c", "t_out_c")
 
 
-def _rows(conn: sqlite3.Connection, since_s: float, signals: Sequence[str],
+def _rows(conn: sqlite3.Connection, since_s: float, until_s: float, signals: Sequence[str],
           model_cols: Sequence[str]) -> tuple[list[tuple[int, int, float]],
                                               dict[tuple[int, int], dict[str, float]]]:
-    """(run, cycle, time) of the stored cycles since ``since_s`` in order, and per cycle the
-    GOOD readings of ``signals`` and the ``model`` columns asked for."""
+    """(run, cycle, time) of the stored cycles from ``since_s`` to ``until_s`` in order, and
+    per cycle the GOOD readings of ``signals`` and the ``model`` columns asked for."""
     first = conn.execute("SELECT MIN(run_id) FROM decisions WHERE time_s >= ?",
                          (since_s,)).fetchone()[0]
     if first is None:
@@ -77,13 +77,14 @@ def _rows(conn: sqlite3.Connection, since_s: float, signals: Sequence[str],
     marks = ", ".join("?" for _ in signals)
     for run, cycle, signal, value in conn.execute(
             f"SELECT run_id, cycle, signal, value FROM samples WHERE time_s >= ? AND "
-            f"signal IN ({marks}) AND quality = 'good' AND value IS NOT NULL",
-            (since_s, *signals)):
+            f"time_s <= ? AND signal IN ({marks}) AND quality = 'good' AND value IS NOT NULL",
+            (since_s, until_s, *signals)):
         values.setdefault((run, cycle), {})[signal] = float(value)
     cycles = []
     for run, cycle, time_s, *cols in conn.execute(
             f"SELECT run_id, cycle, time_s, {', '.join(model_cols)} FROM model "
-            "WHERE run_id >= ? AND time_s >= ? ORDER BY run_id, cycle", (first, since_s)):
+            "WHERE run_id >= ? AND time_s >= ? AND time_s <= ? ORDER BY run_id, cycle",
+            (first, since_s, until_s)):
         cycles.append((int(run), int(cycle), float(time_s)))
         row = values.setdefault((run, cycle), {})
         row.update({c: float(v) for c, v in zip(model_cols, cols, strict=True)
@@ -94,7 +95,7 @@ def _rows(conn: sqlite3.Connection, since_s: float, signals: Sequence[str],
 def _flow_finding(conn: sqlite3.Connection, now_s: float) -> Finding | None:
     """The cavity cross-check on the last day: each reading against the command in force
     during the step that ended at it (the previous cycle's applied position, same run)."""
-    cycles, values = _rows(conn, now_s - CROSSCHECK_WINDOW_S, _SIGNALS[:4],
+    cycles, values = _rows(conn, now_s - CROSSCHECK_WINDOW_S, now_s, _SIGNALS,
                            ("applied_afr", "applied_or_pct"))
     t, v, opened, drive = [], [], [], []
     for (run0, c0, _), (run, cycle, time_s) in itertools.pairwise(cycles):
@@ -119,7 +120,8 @@ def _residual_findings(conn: sqlite3.Connection, now_s: float) -> list[Finding]:
     oldest = conn.execute("SELECT MIN(time_s) FROM decisions").fetchone()[0]
     if oldest is None or now_s - float(oldest) < RESIDUAL_MIN_S:
         return []
-    cycles, values = _rows(conn, now_s - RESIDUAL_WINDOW_S, [r for r, _, _ in _RESIDUALS],
+    cycles, values = _rows(conn, now_s - RESIDUAL_WINDOW_S, now_s,
+                           [r for r, _, _ in _RESIDUALS],
                            [p for _, p, _ in _RESIDUALS])
     times = np.array([c[2] for c in cycles])
     out = []

@@ -1,0 +1,82 @@
+"""The daemon's findings check on a database it could have written (dsfd.daemon.findings):
+the residual detector runs on the stored readings minus the stored one-step predictions once
+six days are stored, finds a 1 K step on one output after it started (never before), and
+names that output only; the check stores it and a later check refreshes it."""
+
+from __future__ import annotations
+
+import sqlite3
+from pathlib import Path
+
+import numpy as np
+
+from dsfd.daemon.findings import RESIDUAL_MIN_S, FindingsStage
+from dsfd.storage.timeseries import Store
+
+STEP_S = 120.0  # two-minute cycles: five readings in every 10-min block
+DAYS = 7
+T0 = 1.7e9
+STEP_AT = T0 + 6.5 * 86400.0
+OUTPUTS = (*(f"x{i}_c" for i in range(1, 6)), "v_cav_ms")
+
+
+def _database(tmp_path: Path) -> Path:
+    """Seven days of cycles: predictions follow a daily cycle, readings are the prediction
+    plus AR(1) noise (0.3 K or 0.02 m/s sd), and x3 reads 1 K high from day 6.5 on."""
+    store = Store.open(tmp_path)
+    run = store.begin_run(panel="p", mode="test", version="0", config_path=None)
+    store.close()
+    rng = np.random.default_rng(7)
+    n = int(DAYS * 86400 / STEP_S)
+    t = T0 + np.arange(n) * STEP_S
+    samples, model, decisions = [], [], []
+    for name in OUTPUTS:
+        sd = 0.02 if name == "v_cav_ms" else 0.3
+        pred = (0.1 if name == "v_cav_ms" else 20.0) + sd * np.sin(2 * np.pi * t / 86400.0)
+        noise = np.zeros(n)
+        for i in range(1, n):  # AR(1), phi 0.5: correlated like one-step errors are
+            noise[i] = 0.5 * noise[i - 1] + rng.normal(0, sd * np.sqrt(1 - 0.25))
+        value = pred + noise + (np.where(t >= STEP_AT, 1.0, 0.0) if name == "x3_c" else 0.0)
+        samples += [(run, c, t[c], name, value[c], "good") for c in range(n)]
+        model.append(pred)
+    cols = ", ".join(f"pred_{o}" for o in OUTPUTS)
+    for c in range(n):
+        decisions.append((run, c, c, t[c], "t", "mpc", 0.0, 10, 0.0, "dry-run", 1.0))
+    db = tmp_path / "timeseries.sqlite"
+    with sqlite3.connect(db) as conn:
+        conn.executemany("INSERT INTO samples (run_id, cycle, time_s, signal, value, quality) "
+                         "VALUES (?, ?, ?, ?, ?, ?)", samples)
+        conn.executemany("INSERT INTO decisions (run_id, cycle, slot, time_s, time_utc, "
+                         "method, phi_deg, afr, or_pct, write_status, cycle_ms) VALUES "
+                         "(?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)", decisions)
+        conn.executemany(f"INSERT INTO model (run_id, cycle, time_s, {cols}) VALUES "
+                         f"(?, ?, ?, {', '.join('?' for _ in OUTPUTS)})",
+                         [(run, c, t[c], *(float(m[c]) for m in model)) for c in range(n)])
+    return db
+
+
+def test_the_check_finds_a_residual_step_after_it_started_and_names_that_output(tmp_path):
+    db = _database(tmp_path)
+    stage = FindingsStage(db, run_id=lambda: 1)
+    conn = sqlite3.connect(db)
+    try:
+        # before six days are stored the residual detector does not run
+        assert RESIDUAL_MIN_S > 5.9 * 86400.0
+        early = stage.check(conn, T0 + 5.9 * 86400.0)
+        assert not early.opened
+        # before the step: nothing; after it: x3 alone
+        assert not stage.check(conn, STEP_AT - 600.0).opened
+        now = T0 + DAYS * 86400.0
+        changes = stage.check(conn, now)
+        assert [f.kind for f in changes.opened] == ["residual_shift"]
+        (f,) = changes.opened
+        assert f.evidence[0].signal == "residual:x3_c"
+        # detected after the step; Page's change time within three blocks of it
+        assert STEP_AT < f.detected_s <= now and abs(f.start_s - STEP_AT) <= 1800.0
+        assert 0.5 <= f.evidence[0].shift <= 1.5  # the 1 K step, within the noise
+        again = stage.check(conn, now + 600.0)
+        assert not again.opened and [fid for fid, _ in again.refreshed] == [1]
+        assert conn.execute("SELECT kind, subject, state FROM findings").fetchall() == [
+            ("residual_shift", "residual:x3_c", "open")]
+    finally:
+        conn.close()
