@@ -79,8 +79,8 @@ class Finding:
         What a person should check; names every cause the evidence cannot separate.
     subject : str
         What the finding is about when a kind can be about several things (the damper(s) of
-        ``damper_no_flow``, e.g. ``IT``); empty otherwise. With the kind it tells one
-        finding from another (dsfd.estimation.lifecycle).
+        ``damper_no_flow``, e.g. ``IT``); empty otherwise (dsfd.estimation.lifecycle
+        tells findings apart).
     """
 
     kind: str

@@ -5,8 +5,9 @@ The daemon runs the detectors (:mod:`dsfd.estimation.diagnostics`,
 findings the evidence supports *now*. :func:`reconcile` turns that into changes of the
 stored findings (docs/model.md#findings):
 
-* a detection whose key (kind and subject) has an **open** stored finding refreshes it
-  (confidence, evidence, the last time it was seen);
+* a detection whose key (:func:`key_of`: the kind, and the signal of a one-signal kind) has
+  an **open** stored finding refreshes it (confidence, evidence, subject, the last time it
+  was seen);
 * a detection whose key was **acknowledged** by an operator stays closed while its
   evidence started no later than the acknowledgement (the operator has seen it); evidence
   that starts after it (a later change point, or a window of readings entirely after it)
@@ -23,7 +24,7 @@ from dataclasses import dataclass, field
 from dsfd.estimation.diagnostics import Finding
 
 __all__ = ["ACKNOWLEDGED", "ENDED", "FINDING_KINDS", "OPEN", "Changes", "StoredFinding",
-           "key_of", "reconcile"]
+           "key_of", "reconcile", "subject_of"]
 
 OPEN, ACKNOWLEDGED, ENDED = "open", "acknowledged", "ended"
 #: Every kind the detectors report (one Home Assistant problem sensor and one metric each).
@@ -34,14 +35,28 @@ _SIGNAL_KINDS = frozenset({"residual_shift", "parameter_shift", "pane_out_of_bou
                            "pane_offset_shift"})
 
 
-def key_of(f: Finding) -> tuple[str, str]:
-    """(kind, subject): what tells one finding from another. The subject is the finding's
-    own (the damper of ``damper_no_flow``), else the signal of a one-signal kind, else ''."""
+def subject_of(f: Finding) -> str:
+    """What the finding is about: its own subject (the damper(s) of ``damper_no_flow``),
+    else the signal of a one-signal kind, else ''."""
     if f.subject:
-        return f.kind, f.subject
+        return f.subject
     if f.kind in _SIGNAL_KINDS and f.evidence:
-        return f.kind, f.evidence[0].signal
-    return f.kind, ""
+        return f.evidence[0].signal
+    return ""
+
+
+def _key(kind: str, subject: str) -> tuple[str, str]:
+    # A one-signal kind is one finding per signal. The cavity cross-check reports one
+    # finding per check; the damper it names is refined as readings come in (a path seen
+    # flowing before the fault can first clear the stuck damper), so its kind alone is the
+    # key and the subject follows the latest check.
+    return (kind, subject) if kind in _SIGNAL_KINDS else (kind, "")
+
+
+def key_of(f: Finding) -> tuple[str, str]:
+    """What tells one finding from another: (kind, signal) for a one-signal kind, else
+    (kind, '')."""
+    return _key(f.kind, subject_of(f))
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -60,7 +75,7 @@ class StoredFinding:
 
     @property
     def key(self) -> tuple[str, str]:
-        return self.kind, self.subject
+        return _key(self.kind, self.subject)
 
 
 @dataclass

@@ -17,7 +17,14 @@ from collections.abc import Sequence
 from typing import Any
 
 from dsfd.estimation.diagnostics import Evidence
-from dsfd.estimation.lifecycle import ACKNOWLEDGED, ENDED, OPEN, Changes, StoredFinding, key_of
+from dsfd.estimation.lifecycle import (
+    ACKNOWLEDGED,
+    ENDED,
+    OPEN,
+    Changes,
+    StoredFinding,
+    subject_of,
+)
 
 __all__ = ["COLUMNS", "acknowledge", "apply", "evidence_json", "load", "open_by_kind",
            "open_findings"]
@@ -42,12 +49,11 @@ def evidence_json(evidence: Sequence[Evidence]) -> str:
 
 
 def load(conn: sqlite3.Connection) -> list[StoredFinding]:
-    """The open findings and, per (kind, subject), the latest acknowledged one."""
+    """The open findings and the acknowledged ones (reconcile keeps the latest per key).
+    Acknowledged rows pile up slowly (an operator's word each), so all are read."""
     rows = conn.execute(
-        "SELECT finding_id, kind, subject, state, start_s, ended_s FROM findings f "
-        "WHERE state = ? OR (state = ? AND finding_id = (SELECT MAX(finding_id) FROM "
-        "findings g WHERE g.kind = f.kind AND g.subject = f.subject AND g.state = ?))",
-        (OPEN, ACKNOWLEDGED, ACKNOWLEDGED)).fetchall()
+        "SELECT finding_id, kind, subject, state, start_s, ended_s FROM findings "
+        "WHERE state IN (?, ?)", (OPEN, ACKNOWLEDGED)).fetchall()
     return [StoredFinding(finding_id=int(i), kind=str(k), subject=str(s), state=str(st),
                           start_s=float(t0), closed_s=None if t1 is None else float(t1))
             for i, k, s, st, t0, t1 in rows]
@@ -63,14 +69,14 @@ def apply(conn: sqlite3.Connection, changes: Changes, *, now_s: float,
                 "INSERT INTO findings (run_id, kind, subject, confidence, start_s, detected_s, "
                 "opened_s, last_seen_s, evidence, action, state) "
                 "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
-                (run_id, f.kind, key_of(f)[1], f.confidence, f.start_s, f.detected_s, now_s,
+                (run_id, f.kind, subject_of(f), f.confidence, f.start_s, f.detected_s, now_s,
                  now_s, evidence_json(f.evidence), f.action, OPEN))
             opened.append(int(cur.lastrowid or 0))
         conn.executemany(
-            "UPDATE findings SET confidence = ?, detected_s = ?, last_seen_s = ?, "
+            "UPDATE findings SET subject = ?, confidence = ?, detected_s = ?, last_seen_s = ?, "
             "evidence = ?, action = ? WHERE finding_id = ? AND state = ?",
-            [(f.confidence, f.detected_s, now_s, evidence_json(f.evidence), f.action, fid, OPEN)
-             for fid, f in changes.refreshed])
+            [(subject_of(f), f.confidence, f.detected_s, now_s, evidence_json(f.evidence),
+              f.action, fid, OPEN) for fid, f in changes.refreshed])
         conn.executemany(
             "UPDATE findings SET state = ?, ended_s = ?, end_reason = ? "
             "WHERE finding_id = ? AND state = ?",

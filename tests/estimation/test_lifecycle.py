@@ -52,13 +52,28 @@ def test_only_the_latest_acknowledgement_of_a_key_counts_and_other_keys_are_inde
     stored = [_stored(1, ACKNOWLEDGED, closed_s=9000.0), _stored(3, ACKNOWLEDGED, closed_s=2000.0)]
     # finding 3 is the newer acknowledgement: evidence from 5000 s is after it
     assert reconcile([_finding(start_s=5000.0)], stored).opened
-    # another damper is another finding, whatever was acknowledged for IT
-    other = _finding(subject="EB")
-    assert reconcile([other], stored).opened == [other]
+    # a residual finding is one per signal: x2 is independent of what was said about x3
+    x3 = [_stored(5, ACKNOWLEDGED, kind="residual_shift", subject="residual:x3_c",
+                  closed_s=9000.0)]
+    x2 = _finding("residual_shift", subject="", signal="residual:x2_c", start_s=10.0)
+    assert reconcile([x2], x3).opened == [x2]
+    assert not reconcile([_finding("residual_shift", subject="", signal="residual:x3_c",
+                                   start_s=10.0)], x3).opened
 
 
-def test_the_key_tells_findings_apart_by_kind_and_subject():
-    assert key_of(_finding()) == ("damper_no_flow", "IT")
+def test_the_cross_check_is_one_finding_per_kind_whose_damper_follows_the_latest_check():
+    # the check first blamed IB+IT (no path had cleared IB yet), now IT alone: the same
+    # finding, refreshed (the stored subject follows), not an end and a new one
+    ch = reconcile([_finding(subject="IT")], [_stored(1, OPEN, subject="IB+IT")])
+    assert [fid for fid, _ in ch.refreshed] == [1] and not ch.opened and not ch.ended
+    # and an acknowledgement of "IB+IT" covers the refined "IT" of the same evidence
+    ch = reconcile([_finding(subject="IT")],
+                   [_stored(1, ACKNOWLEDGED, subject="IB+IT", closed_s=5000.0)])
+    assert not ch.opened and [fid for fid, _ in ch.kept_closed] == [1]
+
+
+def test_the_key_tells_findings_apart_by_kind_and_signal():
+    assert key_of(_finding()) == ("damper_no_flow", "")
     residual = _finding("residual_shift", subject="", signal="residual:x3_c")
     assert key_of(residual) == ("residual_shift", "residual:x3_c")
     assert key_of(_finding("cavity_no_flow", subject="")) == ("cavity_no_flow", "")
