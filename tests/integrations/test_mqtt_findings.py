@@ -8,7 +8,8 @@ damper IT stuck shut from 30 min in, beside a real Mosquitto.
   ``dsfd_finding_open{kind="damper_no_flow"}`` is 1.
 * ``dsfd ack`` of a finding that does not exist is rejected by the daemon and changes
   nothing; malformed ``<base>/cmd/ack`` payloads are answered on ``<base>/error`` and change
-  nothing.
+  nothing, and an ack of an id that is no finding is filed, rejected by the daemon and
+  answered there with its command id.
 * ``mosquitto_pub`` of the finding's id on ``<base>/cmd/ack`` closes it: the topic turns
   ``OFF``, the gauge 0, the row ``acknowledged``; and while the same evidence lasts (the
   damper stays stuck to the end of the run, the checks go on) it stays closed.
@@ -89,7 +90,7 @@ def test_a_stuck_damper_is_published_as_a_problem_and_an_ack_over_mqtt_closes_it
     seen: dict[str, Any] = {}
 
     async def scenario() -> None:
-        d = await DaemonProcess([*run_args(panel, state, start=START, cycles=170, speed=240.0),
+        d = await DaemonProcess([*run_args(panel, state, start=START, cycles=190, speed=240.0),
                                  "--fault", "damper-stuck.IT:+30min:0"]).start()
         finding = await _until(lambda: _it_finding(sub.messages()), FIND_LIMIT_S)
         seen["finding"] = finding
@@ -102,6 +103,10 @@ def test_a_stuck_damper_is_published_as_a_problem_and_an_ack_over_mqtt_closes_it
             publish(broker, f"{BASE}/cmd/ack", payload)
         await _until(lambda: len([m for m in sub.messages()
                                   if m.topic == f"{BASE}/error"]) >= 4)
+        # well-formed, but no such finding: filed, rejected by the loop, answered
+        publish(broker, f"{BASE}/cmd/ack", "999")
+        await _until(lambda: len([m for m in sub.messages()
+                                  if m.topic == f"{BASE}/error"]) >= 5)
         publish(broker, f"{BASE}/cmd/ack", str(finding["id"]))
         seen["closed"] = await _until(lambda: (_latest(sub.messages(), TOPIC) or {}).get(
             "state") == "OFF")
@@ -122,12 +127,15 @@ def test_a_stuck_damper_is_published_as_a_problem_and_an_ack_over_mqtt_closes_it
     assert rc == 1 and "rejected" in out and "finding: 999: no such finding" in out, (out, err)
     errors = [json.loads(m.payload) for m in sub.messages() if m.topic == f"{BASE}/error"]
     assert [e["payload"] for e in errors] == ["abc", '{"finding": 0}', "2.5",
-                                              '{"finding": 1, "x": 2}']
+                                              '{"finding": 1, "x": 2}', "999"]
     assert all(e["topic"] == f"{BASE}/cmd/ack" and e["reason"] for e in errors)
+    assert [e["command_id"] is None for e in errors] == [True] * 4 + [False]
+    assert "no such finding" in errors[-1]["reason"]
     cmds = commands(db)
     assert [(c["kind"], c["source"], c["status"]) for c in cmds] == [
-        ("ack", "cli", "rejected"), ("ack", "mqtt", "applied")]
-    ack = cmds[1]
+        ("ack", "cli", "rejected"), ("ack", "mqtt", "rejected"), ("ack", "mqtt", "applied")]
+    assert errors[-1]["command_id"] == cmds[1]["command_id"]
+    ack = cmds[2]
     assert json.loads(ack["args"]) == {"finding": f["id"]}
     # closed by that command, and still closed at the end although the damper stayed stuck
     # and the checks went on seeing it (no new start: the same evidence)
