@@ -16,9 +16,14 @@ A check, on its own SQLite connection:
    (:func:`dsfd.estimation.lifecycle.reconcile`) and writes the changes in one transaction
    (:mod:`dsfd.storage.findings`); each opened or ended finding is logged.
 
-The night pane check and the parameter-change detector are not run by the daemon yet: the
-first needs a night mask from the sun's position, the second the calibration's posterior sd,
-which the daemon does not store.
+Every :data:`NIGHT_EVERY_S`, once :data:`NIGHT_MIN_S` of history is stored, it also runs
+:func:`~dsfd.estimation.crosschecks.night_pane_check` on the exterior pane x1 over the last
+:data:`NIGHT_WINDOW_S` (readings with the sun 6° below the horizon that had it below the
+horizon two hours before). A detector that did not run in a check ends none of its
+findings.
+
+The parameter-change detector is not run by the daemon: it needs the calibration's
+posterior sd, which the daemon does not store.
 """
 
 from __future__ import annotations
@@ -28,20 +33,22 @@ import itertools
 import sqlite3
 import threading
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from dsfd.config.panel import REGIME_OPENINGS
 from dsfd.daemon.logging_setup import get_logger
-from dsfd.estimation.crosschecks import cavity_flow_check
+from dsfd.estimation.crosschecks import cavity_flow_check, night_pane_check
 from dsfd.estimation.diagnostics import Finding, residual_change
 from dsfd.estimation.lifecycle import Changes, reconcile
+from dsfd.physics.solar.position import solar_position
 from dsfd.storage import findings as table
 from dsfd.storage.schema import BUSY_TIMEOUT_MS
 
 __all__ = ["CHECK_EVERY_S", "CROSSCHECK_WINDOW_S", "DAMPER_SHORT", "FindingsStage",
-           "detect"]
+           "NightSite", "detect"]
 
 log = get_logger("dsfd.findings")
 
@@ -55,6 +62,16 @@ CROSSCHECK_WINDOW_S = 86400.0
 #: on the last seven.
 RESIDUAL_MIN_S = 6 * 86400.0
 RESIDUAL_WINDOW_S = 7 * 86400.0
+#: The night check compares each night with the 7-14 before it (NightCheckSettings): it runs
+#: once 8 days are stored, on the last 3 weeks, every 6 h (a night is judged once it ended).
+NIGHT_MIN_S = 8 * 86400.0
+NIGHT_WINDOW_S = 21 * 86400.0
+NIGHT_EVERY_S = 6 * 3600.0
+#: Night: the sun this far below the horizon [deg] (civil twilight over), and below it
+#: :data:`NIGHT_AFTER_S` before too, so the day's heat has left the panes.
+NIGHT_SUN_DEG = -6.0
+NIGHT_AFTER_S = 2 * 3600.0
+_FLOW_KINDS = ("damper_no_flow", "cavity_no_flow", "cavity_flow_when_closed")
 #: Short damper names (the plant's, the findings'), by opening name.
 DAMPER_SHORT = {"exterior_bottom": "EB", "exterior_top": "ET", "interior_bottom": "IB",
                 "interior_top": "IT"}
@@ -82,7 +99,7 @@ def _rows(conn: sqlite3.Connection, since_s: float, until_s: float, signals: Seq
         values.setdefault((run, cycle), {})[signal] = float(value)
     cycles = []
     for run, cycle, time_s, *cols in conn.execute(
-            f"SELECT run_id, cycle, time_s, {', '.join(model_cols)} FROM model "
+            f"SELECT {', '.join(['run_id', 'cycle', 'time_s', *model_cols])} FROM model "
             "WHERE run_id >= ? AND time_s >= ? AND time_s <= ? ORDER BY run_id, cycle",
             (first, since_s, until_s)):
         cycles.append((int(run), int(cycle), float(time_s)))
@@ -117,9 +134,6 @@ def _flow_finding(conn: sqlite3.Connection, now_s: float) -> Finding | None:
 
 
 def _residual_findings(conn: sqlite3.Connection, now_s: float) -> list[Finding]:
-    oldest = conn.execute("SELECT MIN(time_s) FROM decisions").fetchone()[0]
-    if oldest is None or now_s - float(oldest) < RESIDUAL_MIN_S:
-        return []
     cycles, values = _rows(conn, now_s - RESIDUAL_WINDOW_S, now_s,
                            [r for r, _, _ in _RESIDUALS],
                            [p for _, p, _ in _RESIDUALS])
@@ -134,21 +148,59 @@ def _residual_findings(conn: sqlite3.Connection, now_s: float) -> list[Finding]:
     return out
 
 
-def detect(conn: sqlite3.Connection, now_s: float) -> list[Finding]:
-    """What the detectors report on the rows stored up to ``now_s``."""
+@dataclass(frozen=True, kw_only=True)
+class NightSite:
+    """What the night check needs of the panel: where the sun is, and the room temperature
+    used when the room air is not measured (``room.t_in_c``)."""
+
+    latitude_deg: float
+    longitude_deg: float
+    room_c: float
+
+
+def _night_finding(conn: sqlite3.Connection, now_s: float, site: NightSite) -> Finding | None:
+    cycles, values = _rows(conn, now_s - NIGHT_WINDOW_S, now_s, ("x1_c", "t_out_c", "t_room_c"),
+                           ())
+    if not cycles:
+        return None
+    t = np.array([c[2] for c in cycles])
+    col = {n: np.array([values[c[:2]].get(n, np.nan) for c in cycles])
+           for n in ("x1_c", "t_out_c", "t_room_c")}
+    room = np.where(np.isfinite(col["t_room_c"]), col["t_room_c"], site.room_c)
+    lat, lon = site.latitude_deg, site.longitude_deg
+    night = ((solar_position(t, lat, lon).elevation_deg < NIGHT_SUN_DEG)
+             & (solar_position(t - NIGHT_AFTER_S, lat, lon).elevation_deg < 0.0))
+    return night_pane_check(t, col["x1_c"], col["t_out_c"], room, night, pane="x1_c")
+
+
+def detect(conn: sqlite3.Connection, now_s: float, *, night: NightSite | None = None
+           ) -> tuple[list[Finding], set[str]]:
+    """What the detectors report on the rows stored up to ``now_s``, and the kinds judged
+    (those of the detectors that ran). ``night``: run the night check too."""
     found = [f for f in (_flow_finding(conn, now_s),) if f is not None]
-    return found + _residual_findings(conn, now_s)
+    judged = set(_FLOW_KINDS)
+    oldest = conn.execute("SELECT MIN(time_s) FROM decisions").fetchone()[0]
+    history_s = 0.0 if oldest is None else now_s - float(oldest)
+    if history_s >= RESIDUAL_MIN_S:
+        found += _residual_findings(conn, now_s)
+        judged.add("residual_shift")
+    if night is not None and history_s >= NIGHT_MIN_S:
+        found += [f for f in (_night_finding(conn, now_s, night),) if f is not None]
+        judged |= {"pane_out_of_bounds", "pane_offset_shift"}
+    return found, judged
 
 
 class FindingsStage:
     """Runs :func:`detect` off the loop and keeps the ``findings`` table up to date."""
 
     def __init__(self, database: Path, *, run_id: Callable[[], int | None],
-                 every_s: float = CHECK_EVERY_S) -> None:
+                 night: NightSite | None = None, every_s: float = CHECK_EVERY_S) -> None:
         self.database = database
         self.run_id = run_id
+        self.night = night
         self.every_s = every_s
         self._last_s: float | None = None
+        self._night_s: float | None = None  # the last check that ran the night check
         self._thread: threading.Thread | None = None
         #: Checks that failed (logged); the next one is tried as usual.
         self.failures = 0
@@ -184,7 +236,12 @@ class FindingsStage:
 
     def check(self, conn: sqlite3.Connection, now_s: float) -> Changes:
         """One check at ``now_s`` on ``conn``: detect, reconcile, store, log."""
-        changes = reconcile(detect(conn, now_s), table.load(conn))
+        night = self.night if self._night_s is None or \
+            now_s - self._night_s >= NIGHT_EVERY_S else None
+        found, judged = detect(conn, now_s, night=night)
+        if night is not None and judged >= {"pane_offset_shift"}:
+            self._night_s = now_s
+        changes = reconcile(found, table.load(conn), judged=judged)
         opened = table.apply(conn, changes, now_s=now_s, run_id=self.run_id())
         for fid, f in zip(opened, changes.opened, strict=True):
             log.warning("finding #%d %s: %s", fid, f.kind, f.action, finding_id=fid,

@@ -28,7 +28,7 @@ from typing import Any, Protocol
 
 from dsfd.config import ConfigError, ConfigIssue, PanelConfig
 from dsfd.daemon.clock import Clock, CycleGrid, RealClock, SimulatedClock, Slot
-from dsfd.daemon.findings import FindingsStage
+from dsfd.daemon.findings import FindingsStage, NightSite
 from dsfd.daemon.hold import position_text
 from dsfd.daemon.logging_setup import bind_contextvars, bound_contextvars, get_logger
 from dsfd.daemon.loop import Controller, CycleOutcome
@@ -149,7 +149,9 @@ class _Daemon:
         self.metrics = _metrics_file(cfg)
         self.metrics_failures = 0
         #: The diagnostics, run off the loop on what was stored (issue 38).
-        self.findings = FindingsStage(store.path, run_id=lambda: store.run_id)
+        self.findings = FindingsStage(store.path, run_id=lambda: store.run_id, night=NightSite(
+            latitude_deg=cfg.site.latitude_deg, longitude_deg=cfg.site.longitude_deg,
+            room_c=cfg.room.t_in_c))
 
     async def wait_until(self, deadline_s: float) -> None:
         """Sleep until the deadline, or until a signal asks to stop or reload."""

@@ -13,12 +13,13 @@ stored findings (docs/model.md#findings):
   that starts after it (a later change point, or a window of readings entirely after it)
   is new, and opens a new finding;
 * any other detection opens a new finding;
-* an open finding the detectors no longer report **ends**: its evidence went away.
+* an open finding the detectors no longer report **ends**: its evidence went away (only
+  when its detector ran: one that runs less often, or lacks the history, ends nothing).
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Collection, Iterable, Sequence
 from dataclasses import dataclass, field
 
 from dsfd.estimation.diagnostics import Finding
@@ -90,11 +91,14 @@ class Changes:
     kept_closed: list[tuple[int, Finding]] = field(default_factory=list)
 
 
-def reconcile(detected: Iterable[Finding], stored: Sequence[StoredFinding]) -> Changes:
+def reconcile(detected: Iterable[Finding], stored: Sequence[StoredFinding], *,
+              judged: Collection[str] | None = None) -> Changes:
     """The changes that take the ``stored`` findings to what ``detected`` says now.
 
     ``stored`` holds at least every open finding and, per key, the latest acknowledged one
-    (older rows change nothing). Two detections with one key: the first counts.
+    (older rows change nothing). Two detections with one key: the first counts. ``judged``:
+    the kinds whose detectors ran (None: all); an open finding of a kind not judged this
+    time keeps its state (a detector that did not run has not seen the evidence go).
     """
     out = Changes()
     open_by_key = {s.key: s for s in stored if s.state == OPEN}
@@ -117,5 +121,6 @@ def reconcile(detected: Iterable[Finding], stored: Sequence[StoredFinding]) -> C
             out.kept_closed.append((ack.finding_id, f))
             continue
         out.opened.append(f)
-    out.ended = [s.finding_id for k, s in open_by_key.items() if k not in seen]
+    out.ended = [s.finding_id for k, s in open_by_key.items()
+                 if k not in seen and (judged is None or s.kind in judged)]
     return out

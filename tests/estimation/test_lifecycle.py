@@ -79,3 +79,11 @@ def test_the_key_tells_findings_apart_by_kind_and_signal():
     assert key_of(_finding("cavity_no_flow", subject="")) == ("cavity_no_flow", "")
     # two detections with one key in one check: one finding
     assert len(reconcile([_finding(), _finding(start_s=50.0)], []).opened) == 1
+
+
+def test_a_detector_that_did_not_run_ends_none_of_its_findings():
+    residual = _stored(4, OPEN, kind="residual_shift", subject="residual:x3_c")
+    flow = _stored(5, OPEN)
+    ch = reconcile([], [residual, flow], judged={"damper_no_flow"})
+    assert ch.ended == [5]  # the cross-check ran and no longer sees it; the CUSUM did not run
+    assert reconcile([], [residual, flow], judged=set()).ended == []
