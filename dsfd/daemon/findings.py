@@ -9,7 +9,7 @@ A check, on its own SQLite connection:
 1. reads the rows of the last :data:`CROSSCHECK_WINDOW_S` (the cavity speed, the cavity,
    room and outdoor air readings, and the command in force during each step) and, once
    :data:`RESIDUAL_MIN_S` of history is stored, the one-step prediction errors of the last
-   :data:`RESIDUAL_WINDOW_S`;
+   :data:`RESIDUAL_WINDOW_S` (every :data:`RESIDUAL_EVERY_S`);
 2. runs :func:`~dsfd.estimation.crosschecks.cavity_flow_check` and
    :func:`~dsfd.estimation.diagnostics.residual_change` per output;
 3. reconciles what they report with the stored findings
@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import contextvars
 import itertools
+import math
 import sqlite3
 import threading
 from collections.abc import Callable, Sequence
@@ -62,6 +63,9 @@ CROSSCHECK_WINDOW_S = 86400.0
 #: on the last seven.
 RESIDUAL_MIN_S = 6 * 86400.0
 RESIDUAL_WINDOW_S = 7 * 86400.0
+#: ... every hour: its blocks are 10 min and a step takes hours to find, and a check on
+#: a week of one-minute rows costs about 0.4 s of CPU (a dry run has no minute to spare).
+RESIDUAL_EVERY_S = 3600.0
 #: The night check compares each night with the 7-14 before it (NightCheckSettings): it runs
 #: once 8 days are stored, on the last 3 weeks, every 6 h (a night is judged once it ended).
 NIGHT_MIN_S = 8 * 86400.0
@@ -173,15 +177,17 @@ def _night_finding(conn: sqlite3.Connection, now_s: float, site: NightSite) -> F
     return night_pane_check(t, col["x1_c"], col["t_out_c"], room, night, pane="x1_c")
 
 
-def detect(conn: sqlite3.Connection, now_s: float, *, night: NightSite | None = None
-           ) -> tuple[list[Finding], set[str]]:
+def detect(conn: sqlite3.Connection, now_s: float, *, residuals: bool = True,
+           night: NightSite | None = None) -> tuple[list[Finding], set[str]]:
     """What the detectors report on the rows stored up to ``now_s``, and the kinds judged
-    (those of the detectors that ran). ``night``: run the night check too."""
+    (those of the detectors that ran): the cavity cross-check always, the residual CUSUM if
+    ``residuals``, the night check if ``night``; each of the last two once its history is
+    stored."""
     found = [f for f in (_flow_finding(conn, now_s),) if f is not None]
     judged = set(_FLOW_KINDS)
     oldest = conn.execute("SELECT MIN(time_s) FROM decisions").fetchone()[0]
     history_s = 0.0 if oldest is None else now_s - float(oldest)
-    if history_s >= RESIDUAL_MIN_S:
+    if residuals and history_s >= RESIDUAL_MIN_S:
         found += _residual_findings(conn, now_s)
         judged.add("residual_shift")
     if night is not None and history_s >= NIGHT_MIN_S:
@@ -200,7 +206,8 @@ class FindingsStage:
         self.night = night
         self.every_s = every_s
         self._last_s: float | None = None
-        self._night_s: float | None = None  # the last check that ran the night check
+        #: The last check that ran the residual CUSUM, the night check.
+        self._ran_s: dict[str, float] = {}
         self._thread: threading.Thread | None = None
         #: Checks that failed (logged); the next one is tried as usual.
         self.failures = 0
@@ -236,11 +243,13 @@ class FindingsStage:
 
     def check(self, conn: sqlite3.Connection, now_s: float) -> Changes:
         """One check at ``now_s`` on ``conn``: detect, reconcile, store, log."""
-        night = self.night if self._night_s is None or \
-            now_s - self._night_s >= NIGHT_EVERY_S else None
-        found, judged = detect(conn, now_s, night=night)
-        if night is not None and judged >= {"pane_offset_shift"}:
-            self._night_s = now_s
+        due = {name for name, every in (("residual", RESIDUAL_EVERY_S), ("night", NIGHT_EVERY_S))
+               if now_s - self._ran_s.get(name, -math.inf) >= every}
+        found, judged = detect(conn, now_s, residuals="residual" in due,
+                               night=self.night if "night" in due else None)
+        for name, kind in (("residual", "residual_shift"), ("night", "pane_offset_shift")):
+            if kind in judged:
+                self._ran_s[name] = now_s
         changes = reconcile(found, table.load(conn), judged=judged)
         opened = table.apply(conn, changes, now_s=now_s, run_id=self.run_id())
         for fid, f in zip(opened, changes.opened, strict=True):

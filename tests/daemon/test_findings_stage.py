@@ -1,7 +1,7 @@
 """The daemon's findings check on a database it could have written (dsfd.daemon.findings):
 the residual detector runs on the stored readings minus the stored one-step predictions once
 six days are stored, finds a 1 K step on one output after it started (never before), and
-names that output only; the check stores it and a later check refreshes it."""
+names that output only; the check stores it and the next hourly run refreshes it."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dsfd.daemon.findings import RESIDUAL_MIN_S, FindingsStage, NightSite
+from dsfd.daemon.findings import RESIDUAL_EVERY_S, RESIDUAL_MIN_S, FindingsStage, NightSite
 from dsfd.storage.timeseries import Store
 
 STEP_S = 120.0  # two-minute cycles: five readings in every 10-min block
@@ -85,7 +85,10 @@ def test_the_check_finds_a_residual_step_after_it_started_and_names_that_output(
         # detected after the step; Page's change time within three blocks of it
         assert STEP_AT < f.detected_s <= now and abs(f.start_s - STEP_AT) <= 1800.0
         assert 0.5 <= f.evidence[0].shift <= 1.5  # the 1 K step, within the noise
-        again = stage.check(conn, now + 600.0)
+        # 10 min later the CUSUM is not due (hourly): the finding stays open untouched
+        soon = stage.check(conn, now + 600.0)
+        assert not soon.opened and not soon.refreshed and not soon.ended
+        again = stage.check(conn, now + RESIDUAL_EVERY_S)
         assert not again.opened and [fid for fid, _ in again.refreshed] == [1]
         assert conn.execute("SELECT kind, subject, state FROM findings").fetchall() == [
             ("residual_shift", "residual:x3_c", "open")]
