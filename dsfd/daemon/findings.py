@@ -216,7 +216,8 @@ class FindingsStage:
         """Start a check if one is due and none runs; whether one started."""
         if self._thread is not None and self._thread.is_alive():
             return False
-        if self._last_s is not None and now_s - self._last_s < self.every_s:
+        # abs: a wall clock stepped back (NTP) must not stop the checks until it catches up
+        if self._last_s is not None and abs(now_s - self._last_s) < self.every_s:
             return False
         self._last_s = now_s
         ctx = contextvars.copy_context()  # the log lines keep the panel
@@ -244,7 +245,7 @@ class FindingsStage:
     def check(self, conn: sqlite3.Connection, now_s: float) -> Changes:
         """One check at ``now_s`` on ``conn``: detect, reconcile, store, log."""
         due = {name for name, every in (("residual", RESIDUAL_EVERY_S), ("night", NIGHT_EVERY_S))
-               if now_s - self._ran_s.get(name, -math.inf) >= every}
+               if abs(now_s - self._ran_s.get(name, -math.inf)) >= every}
         found, judged = detect(conn, now_s, residuals="residual" in due,
                                night=self.night if "night" in due else None)
         for name, kind in (("residual", "residual_shift"), ("night", "pane_offset_shift")):
