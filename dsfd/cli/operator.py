@@ -1,5 +1,5 @@
-"""``dsfd override``, ``dsfd resume``, ``dsfd mode`` and ``dsfd occupancy``: operator commands
-to the running daemon of a panel.
+"""``dsfd override``, ``dsfd resume``, ``dsfd mode``, ``dsfd occupancy`` and ``dsfd ack``:
+operator commands to the running daemon of a panel.
 
 Examples::
 
@@ -10,6 +10,7 @@ Examples::
     sudo dsfd occupancy --config /etc/dsfd/suwon-south.yaml occupied until 20:00
     sudo dsfd occupancy --config /etc/dsfd/suwon-south.yaml unoccupied until 2026-12-01T08:00
     sudo dsfd occupancy --config /etc/dsfd/suwon-south.yaml auto      # end the override
+    sudo dsfd ack --config /etc/dsfd/suwon-south.yaml 3               # acknowledge finding #3
 
 The request is validated against the panel (louver grid and limits, the regimes the dampers
 allow, damper steps) before anything is queued; a bad one exits 2 naming the option and the
@@ -37,7 +38,8 @@ from dsfd.cli.state_dir import SYSTEMD_STATE_ROOT, state_dir_of
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_NOT_RUNNING, EXIT_NO_ACCESS = 0, 1, 2, 3, 4
 #: Option names of the request fields (for error messages).
 OPTION_OF = {"hold": "--hold", "louver_deg": "--louver-deg", "regime": "--regime",
-             "or_pct": "--or-pct", "mode": "OBJECTIVE", "state": "STATE", "until": "until"}
+             "or_pct": "--or-pct", "mode": "OBJECTIVE", "state": "STATE", "until": "until",
+             "finding": "FINDING_ID"}
 
 
 class OperatorError(Exception):
@@ -172,6 +174,16 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="when the override ends: 'until 18:00', 'until 2026-12-01T08:00'")
     _wait_options(c)
     c.set_defaults(handler=occupancy)
+    a = sub.add_parser(
+        "ack", help="acknowledge an open finding of the diagnostics (dsfd status lists them)",
+        description="Tell the running daemon that a person has seen an open finding (a "
+        "damper that does not follow its motor, a residual that shifted, ...): it closes, and "
+        "stays closed until new evidence (a later start) opens a new one. It moves nothing. "
+        "Takes effect at the next cycle.")
+    add_target(a)
+    a.add_argument("finding", metavar="FINDING_ID", help="the finding's id (dsfd status)")
+    _wait_options(a)
+    a.set_defaults(handler=ack)
 
 
 def _wait_options(p: argparse.ArgumentParser) -> None:
@@ -208,6 +220,12 @@ def occupancy(args: argparse.Namespace) -> int:
         print(f"dsfd occupancy: {exc}; nothing was sent", file=sys.stderr)
         return EXIT_USAGE
     return _send("occupancy", request, args)
+
+
+def ack(args: argparse.Namespace) -> int:
+    text = args.finding.strip()
+    return _send("ack", {"command": "ack", "finding": int(text) if text.isdigit() else text},
+                 args)
 
 
 def _send(name: str, request: dict[str, Any], args: argparse.Namespace) -> int:

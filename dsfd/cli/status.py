@@ -6,7 +6,8 @@ can run any time next to the service. What it shows: the run (mode, start), the 
 (time, decision time, method), the current command and who set it (optimiser, baseline, safe
 state, a manual hold, the wind), the hold and its expiry, the signals flagged in the last
 cycle, the calibration's age and the parameters sitting at a bound, the operator commands
-(pending, last answer) and, with an ``mqtt:`` section, the publisher's delivery state per
+(pending, last answer), the open findings of the diagnostics (issue 38; ``dsfd ack`` closes
+one) and, with an ``mqtt:`` section, the publisher's delivery state per
 broker (``mqtt_cursor``). ``--json`` prints the same as one JSON object.
 
 Exit codes (as ``systemctl status``, LSB): 0 a daemon is running, 3 none is, 4 the state
@@ -33,6 +34,7 @@ from dsfd.cli.operator import (
     load_target,
     open_database,
 )
+from dsfd.measured import iso_utc
 from dsfd.storage.queries import first_row
 
 _SET_BY = {"mpc": "optimiser (mpc)", "paper-sqp": "optimiser (paper-sqp)",
@@ -100,11 +102,31 @@ def _gather(conn: sqlite3.Connection, state: Path, cfg: Any | None, now: float,
         "flagged": [] if last is None else _flagged(conn, last),
         "calibration": _calibration(conn, cfg, (run or {}).get("panel"), now),
         "commands": _commands(conn) if "commands" in tables else None,
+        "findings": _findings(conn),
         "mqtt": _mqtt(conn, running=pid is not None) if "mqtt_cursor" in tables else [],
     }
     if last is not None and "hold_source" not in columns(conn, "decisions"):
         info["note"] = "database of an older dsfd (schema 1): no hold information"
     return info
+
+
+def _findings(conn: sqlite3.Connection) -> list[dict[str, Any]]:
+    """The open findings (none in a database older than schema 7), evidence parsed."""
+    from dsfd.storage.findings import open_findings
+
+    return open_findings(conn)
+
+
+def _finding_lines(found: list[dict[str, Any]]) -> list[str]:
+    if not found:
+        return ["  findings:    none open"]
+    out = [f"  findings:    {len(found)} open (dsfd ack FINDING_ID closes one)"]
+    for f in found:
+        subject = f" {f['subject']}" if f["subject"] else ""
+        since = iso_utc(round(f["start_s"]))
+        out.append(f"    #{f['finding_id']} {f['kind']}{subject} since {since}, confidence "
+                   f"{f['confidence']:.2f}: {f['action']}")
+    return out
 
 
 def _requester(conn: sqlite3.Connection, command_id: int) -> dict[str, Any] | None:
@@ -315,6 +337,7 @@ def render(info: dict[str, Any]) -> list[str]:
                      f"{last['requester']}: {last['status']}"
                      + (f" ({last['reason']})" if last["reason"] else ""))
         out.append(f"  commands:    {line}")
+    out += _finding_lines(info.get("findings") or [])
     for m in info.get("mqtt") or []:
         out += _mqtt_lines(m, running=d["running"])
     if info.get("note"):

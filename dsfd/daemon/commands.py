@@ -6,7 +6,7 @@ configuration and a request mapping in, a validated :class:`OperatorCommand` or 
 A request is a mapping of fields (JSON-ready, as stored in the ``commands`` table):
 
 =============  ==============================================================================
-``command``    ``override``, ``resume`` or ``mode``
+``command``    ``override``, ``resume``, ``mode``, ``occupancy`` or ``ack``
 ``hold``       override only: how long, e.g. ``"2h"``, ``"90min"``, ``"1h30m"``, ``"45m"``,
                or a number of minutes; absent: ``safety.manual_hold_min`` (cut at the daily
                ``safety.manual_reset_local``)
@@ -20,6 +20,8 @@ A request is a mapping of fields (JSON-ready, as stored in the ``commands`` tabl
 ``until``      occupancy only (required with occupied/unoccupied): when the override ends,
                ``"HH:MM"`` panel local time (the next such time) or an ISO 8601 date-time
                (``2026-12-01T08:00``: panel local time; with ``Z`` or ``+09:00``: that zone)
+``finding``    ack only (required): the id of the open finding an operator acknowledges
+               (``dsfd status`` lists them; docs/model.md#findings)
 =============  ==============================================================================
 
 Positions left out stay where the actuators are when the daemon applies the command; an
@@ -57,9 +59,9 @@ __all__ = [
     "validate_command",
 ]
 
-COMMAND_KINDS = ("override", "resume", "mode", "occupancy")
+COMMAND_KINDS = ("override", "resume", "mode", "occupancy", "ack")
 _FIELDS = {"override": ("hold", "louver_deg", "regime", "or_pct"), "resume": (),
-           "mode": ("mode",), "occupancy": ("state", "until")}
+           "mode": ("mode",), "occupancy": ("state", "until"), "ack": ("finding",)}
 #: What an ``occupancy`` command may say.
 OCCUPANCY_STATES = ("occupied", "unoccupied", "auto")
 _CLOCK = re.compile(r"^([01][0-9]|2[0-3]):([0-5][0-9])$")
@@ -97,6 +99,8 @@ class OperatorCommand:
     #: occupancy only: ``occupied``, ``unoccupied`` or ``auto``, and the ``until`` as given.
     state: str | None = None
     until: str | None = None
+    #: ack only: the finding acknowledged.
+    finding: int | None = None
 
     def positions(self) -> dict[str, float]:
         """The positions given, by actuator name."""
@@ -108,6 +112,8 @@ class OperatorCommand:
             return "resume"
         if self.kind == "mode":
             return f"mode {self.mode}"
+        if self.kind == "ack":
+            return f"ack finding #{self.finding}"
         if self.kind == "occupancy":
             return f"occupancy {self.state}" + (f" until {self.until}" if self.until else "")
         parts = [f"{k} {v:g}" for k, v in self.positions().items()] or ["positions kept"]
@@ -163,6 +169,8 @@ def validate_command(cfg: PanelConfig, request: Mapping[str, Any]) -> OperatorCo
         return OperatorCommand("mode", mode=mode)
     if kind == "occupancy":
         return _occupancy(request)
+    if kind == "ack":
+        return OperatorCommand("ack", finding=_finding_id(request.get("finding")))
     hold_s = _hold(request["hold"]) if request.get("hold") is not None else None
     phi = _louver(cfg, request["louver_deg"]) if request.get("louver_deg") is not None \
         else None
@@ -191,6 +199,22 @@ def occupancy_request(text: str) -> dict[str, Any]:
     if rest:
         request["until"] = rest[1]
     return request
+
+
+_MAX_ROWID = 2**63 - 1
+
+
+def _finding_id(value: Any) -> int:
+    """A finding id: a whole number from 1 to SQLite's largest integer (digits in a string
+    too: a CLI argument)."""
+    if isinstance(value, str) and value.strip().isdigit() and len(value.strip()) <= 19:
+        value = int(value.strip())
+    if isinstance(value, bool) or not isinstance(value, int | float) or value != value \
+            or value in (math.inf, -math.inf) or value != int(value) \
+            or not 1 <= value <= _MAX_ROWID:
+        raise CommandError("finding", value, "expected the id of a finding, a whole number "
+                           "from 1 (dsfd status lists the open ones)")
+    return int(value)
 
 
 def _occupancy(request: Mapping[str, Any]) -> OperatorCommand:

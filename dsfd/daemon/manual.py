@@ -13,6 +13,9 @@ previous run left active (the last stored decision says so, and it has not expir
 position the actuators have then: a restart of the service neither undoes a person's hold
 nor moves the panel.
 
+``ack`` commands close an open finding of the diagnostics (:mod:`dsfd.storage.findings`;
+docs/model.md#findings); they move nothing either.
+
 ``occupancy`` commands go to :class:`~dsfd.daemon.occupancy.OccupancyStage` (an override of
 the occupancy the comfort limits follow, until a time); they are no hold either.
 
@@ -37,6 +40,7 @@ from dsfd.daemon.hold import Hold, HoldTracker, HoldUpdate, PendingCommand
 from dsfd.daemon.occupancy import OccupancyStage
 from dsfd.drivers.base import Command
 from dsfd.storage import commands as command_table
+from dsfd.storage import findings as finding_table
 from dsfd.storage.timeseries import Store
 
 __all__ = ["ManualStage"]
@@ -126,16 +130,19 @@ class ManualStage:
         for pending in self._claim():
             kind = pending.command.kind if isinstance(pending.command, OperatorCommand) \
                 else None
-            (others if kind in ("mode", "occupancy") else holds).append(pending)
+            (others if kind in ("mode", "occupancy", "ack") else holds).append(pending)
         up = self.tracker.update(now_mono_s=now_mono_s, now_s=now_s, read_back=read_back,
                                  expected=expected, input_active=input_active,
                                  input_where=input_where, commands=holds)
         up.events[:0] = [*self._events, *self.occupancy.expire(now_s)]
         self._events = []
         for pending in others:
-            if isinstance(pending.command, OperatorCommand) and \
-                    pending.command.kind == "occupancy":
+            kind = pending.command.kind if isinstance(pending.command, OperatorCommand) \
+                else None
+            if kind == "occupancy":
                 self._set_occupancy(up, pending, now_s)
+            elif kind == "ack":
+                self._acknowledge(up, pending, now_s)
             else:
                 self._set_mode(up, pending)
         return up
@@ -150,6 +157,21 @@ class ManualStage:
         up.results.append(result)
         if event is not None:
             up.events.append(event)
+
+    def _acknowledge(self, up: HoldUpdate, pending: PendingCommand, now_s: float) -> None:
+        """An ``ack`` command: the finding closes now (dsfd.storage.findings.acknowledge;
+        one short transaction on the loop's reading connection)."""
+        assert isinstance(pending.command, OperatorCommand)
+        cid, fid = pending.command_id, int(pending.command.finding or 0)
+        who = f"#{cid} {pending.source} {pending.requester}"
+        try:
+            status, reason = finding_table.acknowledge(self.store.reader(), fid, command_id=cid,
+                                                       now_s=now_s, who=who)
+        except sqlite3.Error as exc:
+            status, reason = "rejected", f"finding: {fid}: not acknowledged: {exc}"
+        up.results.append((cid, status, reason))
+        if status == "applied":
+            up.events.append(("info", "finding_acknowledged", f"{reason} (by {who})"))
 
     def _set_mode(self, up: HoldUpdate, pending: PendingCommand) -> None:
         """A ``mode`` command: the objective from this cycle on (an input hold does not

@@ -34,6 +34,8 @@ dsfd_radiant_asymmetry_kelvin          gauge    the inner pane's radiant asymmet
 dsfd_occupied_seconds_total            counter  occupied time (one cycle period per cycle)
 dsfd_comfort_exceeded_seconds_total    counter  occupied time beyond a comfort limit; limit:
 {limit}                                         direct_sun, glare, draught, asymmetry
+dsfd_finding_open{kind}                gauge    open findings of the diagnostics by kind
+                                                (docs/model.md#findings; issue 38)
 =====================================  =======  ==============================================
 
 The comfort series follow the day figures of the MQTT ``kpi`` topic
@@ -67,6 +69,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar
 
+from dsfd.estimation.lifecycle import FINDING_KINDS
 from dsfd.storage.schema import HEAT_TERMS
 
 if TYPE_CHECKING:
@@ -140,6 +143,9 @@ class MetricsFile:
         for term in HEAT_TERMS:
             self.heat.labels(panel, term).set(math.nan)
         self._comfort = _ComfortMetrics(r, panel)
+        self.findings = gauge("dsfd_finding_open", "Open findings of the diagnostics by kind",
+                              [*p, "kind"])
+        self.update_findings({})
         self.calibration_age.labels(panel).set(math.nan)
         self.write_failures.labels(panel)
         self.updates.labels(panel)
@@ -174,6 +180,11 @@ class MetricsFile:
             self.heat.labels(panel, term).set(math.nan if pred is None else pred.heat_w[term])
         cfg = calibration.cfg
         self._comfort.update(out, cfg.comfort, period_s=cfg.daemon.cycle_period_s)
+
+    def update_findings(self, open_by_kind: Mapping[str, int]) -> None:
+        """Open findings by kind (every known kind, 0 when none is open)."""
+        for kind in (*FINDING_KINDS, *open_by_kind):
+            self.findings.labels(self.panel, kind).set(float(open_by_kind.get(kind, 0)))
 
     def update_mqtt(self, health: Mapping[str, Any]) -> None:
         """Take the MQTT publisher's state (``MqttPublisher.health``)."""

@@ -28,6 +28,7 @@ from typing import Any, Protocol
 
 from dsfd.config import ConfigError, ConfigIssue, PanelConfig
 from dsfd.daemon.clock import Clock, CycleGrid, RealClock, SimulatedClock, Slot
+from dsfd.daemon.findings import FindingsStage, NightSite
 from dsfd.daemon.hold import position_text
 from dsfd.daemon.logging_setup import bind_contextvars, bound_contextvars, get_logger
 from dsfd.daemon.loop import Controller, CycleOutcome
@@ -39,6 +40,7 @@ from dsfd.daemon.state import open_state, restore_operator_state
 from dsfd.daemon.summary import RunSummary
 from dsfd.drivers.base import Driver
 from dsfd.measured import iso_utc
+from dsfd.storage.findings import open_by_kind
 from dsfd.storage.lock import StateLock
 from dsfd.storage.timeseries import Store
 
@@ -146,6 +148,10 @@ class _Daemon:
         self.reloads_rejected = 0
         self.metrics = _metrics_file(cfg)
         self.metrics_failures = 0
+        #: The diagnostics, run off the loop on what was stored (issue 38).
+        self.findings = FindingsStage(store.path, run_id=lambda: store.run_id, night=NightSite(
+            latitude_deg=cfg.site.latitude_deg, longitude_deg=cfg.site.longitude_deg,
+            room_c=cfg.room.t_in_c))
 
     async def wait_until(self, deadline_s: float) -> None:
         """Sleep until the deadline, or until a signal asks to stop or reload."""
@@ -193,6 +199,7 @@ class _Daemon:
         if out.store_ok:
             for integration in self.integrations:
                 integration.cycle_stored(out.cycle)
+            self.findings.after_cycle(out.time_s)
         self.write_metrics(out)
         if self.opts.on_cycle is not None:
             self.opts.on_cycle(out)
@@ -218,6 +225,7 @@ class _Daemon:
             return
         try:
             self.metrics.update(out, self.controller.calibration)
+            self.metrics.update_findings(open_by_kind(self.store.reader()))
             for integration in self.integrations:
                 if integration.name == "mqtt":
                     self.metrics.update_mqtt(integration.health())
@@ -366,6 +374,7 @@ async def _serve_locked(opts: RunOptions, cfg: PanelConfig, *, state_dir: Path,
         notifier.stopping(f"stopping: {reason}")
         for sig in (signal.SIGTERM, signal.SIGINT, signal.SIGHUP):
             loop.remove_signal_handler(sig)
+        await asyncio.to_thread(daemon.findings.stop)
         try:
             store.end_run(reason=reason, cycles=daemon.summary.cycles)
         except sqlite3.Error as exc:

@@ -114,7 +114,8 @@ def cavity_flow_check(times_s: np.ndarray, v_cav_ms: np.ndarray,
                   detected_s=float(t[all_dead][-1]), evidence=evidence)
     if suspects:
         names = ", ".join(sorted(suspects))
-        return Finding(kind="damper_no_flow", **common, action=(
+        return Finding(kind="damper_no_flow", **common, subject="+".join(sorted(suspects)),
+                       action=(
             f"no air through the paths that need damper {names}, while "
             + ("the other paths move air" if live else "no other path was tried")
             + f": check damper {names} (its blade may not follow its motor)"

@@ -77,6 +77,10 @@ class Finding:
     evidence : tuple of Evidence
     action : str
         What a person should check; names every cause the evidence cannot separate.
+    subject : str
+        What the finding is about when a kind can be about several things (the damper(s) of
+        ``damper_no_flow``, e.g. ``IT``); empty otherwise (dsfd.estimation.lifecycle
+        tells findings apart).
     """
 
     kind: str
@@ -85,6 +89,7 @@ class Finding:
     detected_s: float
     evidence: tuple[Evidence, ...]
     action: str
+    subject: str = ""
 
 
 @dataclass(frozen=True)

@@ -23,6 +23,7 @@ __all__ = [
     "BUSY_TIMEOUT_MS",
     "COMFORT_COLUMNS",
     "DB_NAME",
+    "FINDINGS_TABLE",
     "HEAT_TERMS",
     "MIGRATIONS",
     "MODEL_COLUMNS",
@@ -37,7 +38,7 @@ __all__ = [
 ]
 
 DB_NAME = "timeseries.sqlite"
-SCHEMA_VERSION = 6
+SCHEMA_VERSION = 7
 #: How long a connection waits for another one's lock before a statement fails [ms].
 BUSY_TIMEOUT_MS = 5000
 
@@ -59,6 +60,31 @@ CREATE TABLE IF NOT EXISTS mqtt_cursor (
     kpi_day TEXT,
     updated_utc TEXT NOT NULL
 );
+"""
+
+#: What the daemon's diagnostics found (schema 7, issue 38; docs/storage-schema.md): one row
+#: per finding, open until its evidence goes away (``ended``) or an operator acknowledges it
+#: (``acknowledged``, with the ``ack`` command behind it). Written by the daemon's findings
+#: thread (dsfd.daemon.findings) and, for an acknowledgement, by the loop.
+FINDINGS_TABLE = """
+CREATE TABLE IF NOT EXISTS findings (
+    finding_id INTEGER PRIMARY KEY AUTOINCREMENT,
+    run_id INTEGER,
+    kind TEXT NOT NULL,
+    subject TEXT NOT NULL DEFAULT '',
+    confidence REAL NOT NULL,
+    start_s REAL NOT NULL,
+    detected_s REAL NOT NULL,
+    opened_s REAL NOT NULL,
+    last_seen_s REAL NOT NULL,
+    evidence TEXT NOT NULL DEFAULT '[]',
+    action TEXT NOT NULL,
+    state TEXT NOT NULL DEFAULT 'open',
+    ended_s REAL,
+    end_reason TEXT NOT NULL DEFAULT '',
+    ack_command_id INTEGER
+);
+CREATE INDEX IF NOT EXISTS findings_by_state ON findings (state, kind);
 """
 
 #: Schema changes, in order: ``MIGRATIONS[v]`` is the SQL script that takes a database of
@@ -93,6 +119,8 @@ MIGRATIONS: dict[int, str] = {
         ALTER TABLE decisions ADD COLUMN occupancy_until_s REAL;
         ALTER TABLE decisions ADD COLUMN occupancy_command_id INTEGER
     """,
+    # Fault and drift diagnostics (issue 38): the findings of the daemon's detectors.
+    7: FINDINGS_TABLE,
 }
 
 _STATES = ("x1", "x2", "x3", "x4", "x5")
@@ -242,7 +270,7 @@ CREATE TABLE IF NOT EXISTS commands (
     handled_utc TEXT
 );
 CREATE INDEX IF NOT EXISTS commands_pending ON commands (status, command_id);
-""" + MQTT_CURSOR_TABLE
+""" + MQTT_CURSOR_TABLE + FINDINGS_TABLE
 
 
 class SchemaTooNewError(RuntimeError):

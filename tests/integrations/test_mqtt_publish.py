@@ -22,6 +22,7 @@ from typing import Any
 
 import pytest
 
+from dsfd.estimation.lifecycle import FINDING_KINDS
 from dsfd.integrations.mqtt.broker import LocalBroker
 from dsfd.report.kpis import compute_kpis
 from dsfd.storage.history import read_history
@@ -157,6 +158,9 @@ def check_discovery(configs: dict[str, dict[str, Any]], states: list[dict[str, A
                     got: list[Message], kpi: dict[str, Any]) -> None:
     components: Counter[str] = Counter()
     devices = []
+    # the retained open findings per kind (issue 38): a clean run has none, so all OFF
+    findings = {m.topic: m.json() for m in got if m.topic.startswith(f"{BASE}/finding/")}
+    assert {f["state"] for f in findings.values()} == {"OFF"}
     for topic, cfg in configs.items():
         m = TOPIC.match(topic)
         assert m, topic
@@ -173,8 +177,10 @@ def check_discovery(configs: dict[str, dict[str, Any]], states: list[dict[str, A
             assert cfg["command_topic"].startswith(f"{BASE}/cmd/")
         rendered: list[str] = []
         if "state_topic" in cfg:
-            assert cfg["state_topic"] in (f"{BASE}/state", f"{BASE}/kpi")
-            sources = states if cfg["state_topic"] == f"{BASE}/state" else [kpi]
+            assert cfg["state_topic"] in (f"{BASE}/state", f"{BASE}/kpi", *findings)
+            sources = (states if cfg["state_topic"] == f"{BASE}/state" else
+                       [kpi] if cfg["state_topic"] == f"{BASE}/kpi" else
+                       [findings[cfg["state_topic"]]])
             rendered = [render(cfg["value_template"], s) for s in sources]
         if component == "sensor" and "device_class" in cfg:
             assert cfg["unit_of_measurement"] in UNITS[cfg["device_class"]], topic
@@ -200,7 +206,8 @@ def check_discovery(configs: dict[str, dict[str, Any]], states: list[dict[str, A
             assert cfg["payload_press"]
     assert len(set(cfg["unique_id"] for cfg in configs.values())) == len(configs)
     assert len(set(devices)) == 1  # one device per panel
-    assert components["binary_sensor"] == 2 and components["select"] == 2
+    assert components["binary_sensor"] == 2 + len(FINDING_KINDS) == 2 + len(findings)
+    assert components["select"] == 2
     assert components["number"] == 2 and components["button"] == 1
     # x1..x5, the cavity speed and the heat terms have sensors with their device classes.
     classes = {cfg["value_template"]: cfg.get("device_class") for cfg in configs.values()

@@ -8,6 +8,7 @@ import sys
 import pytest
 from prometheus_client.parser import text_string_to_metric_families
 
+from dsfd.estimation.lifecycle import FINDING_KINDS
 from tests.daemon.harness import MORNING_ISO, ROOT, dsfd_command, query, write_panel
 
 CYCLES = 40
@@ -19,7 +20,7 @@ METRICS = {"dsfd_cycle_duration_seconds", "dsfd_decision_duration_seconds",
            "dsfd_occupied", "dsfd_occupancy_override_active",
            "dsfd_direct_sun_watts_per_square_meter", "dsfd_daylight_glare_probability",
            "dsfd_supply_air_celsius", "dsfd_radiant_asymmetry_kelvin",
-           "dsfd_occupied_seconds", "dsfd_comfort_exceeded_seconds"}
+           "dsfd_occupied_seconds", "dsfd_comfort_exceeded_seconds", "dsfd_finding_open"}
 ALWAYS = ["00:00-24:00"]
 #: Every day occupied, and a supply-air limit warm enough to be broken in winter.
 COMFORT = {"occupancy": {d: ALWAYS for d in ("mon", "tue", "wed", "thu", "fri", "sat", "sun")},
@@ -83,6 +84,12 @@ def test_metrics_file_is_complete_at_every_read_and_matches_the_database(tmp_pat
     assert set(heat) == {"q_cv_rd", "q_sol_trans", "q_air", "q_da"}
     assert heat["q_sol_trans"] == q_sol
     check_comfort(families, db)
+    # the open findings by kind (issue 38): every kind has its series, as in the database
+    found = {s.labels["kind"]: s.value for s in families["dsfd_finding_open"]}
+    stored = dict(query(db, "SELECT kind, COUNT(*) FROM findings WHERE state = 'open' "
+                            "GROUP BY kind"))
+    assert set(found) == set(FINDING_KINDS) | set(stored)
+    assert found == {k: float(stored.get(k, 0)) for k in found}
 
 
 def check_comfort(families: dict[str, list], db) -> None:

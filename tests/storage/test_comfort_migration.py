@@ -39,7 +39,7 @@ def test_a_schema_5_database_is_migrated_and_keeps_its_rows(tmp_path: Path) -> N
     assert store.moved_aside is None
     conn = store.conn
     meta = dict(conn.execute("SELECT key, value FROM meta"))
-    assert SCHEMA_VERSION == 6 and meta["schema_version"] == "6" and "migrated_to_6" in meta
+    assert meta["schema_version"] == str(SCHEMA_VERSION) and "migrated_to_6" in meta
     assert _counts(conn) == before
     # the old decisions are unchanged in their old columns, NULL in the new ones
     rows = conn.execute("SELECT * FROM decisions ORDER BY cycle").fetchall()

@@ -24,6 +24,8 @@ subtopic            payload
 ``occupancy``       ``occupied until 18:00``, ``unoccupied until 2026-12-01T08:00`` or ``auto``
                     (or ``{"state": "occupied", "until": "18:00"}``): the occupancy override
                     of ``dsfd occupancy``
+``ack``             the id of an open finding (``3``, or ``{"finding": 3}``): it closes until
+                    new evidence opens a new one, as ``dsfd ack``
 ==================  ===========================================================================
 
 Every hold from the single-value topics lasts ``safety.manual_hold_min`` (to the daily reset
@@ -55,7 +57,7 @@ MAX_PAYLOAD_BYTES = 1024
 SHOWN_BYTES = 200
 #: Command subtopics under ``<base>/cmd/``, as the discovery configs name them.
 SUBTOPICS: tuple[str, ...] = ("override", "regime", "louver_deg", "damper_pct", "resume",
-                              "mode", "occupancy")
+                              "mode", "occupancy", "ack")
 _OPTION = re.compile(r"^\s*(\d{1,2})\s*(?::\s*(.*?))?\s*$", re.DOTALL)
 
 
@@ -90,6 +92,9 @@ def request_of(subtopic: str, payload: bytes) -> dict[str, Any]:
         if text.startswith("{"):
             return {"command": "occupancy", **_object(text)}
         return occupancy_request(text)
+    if subtopic == "ack":
+        fields = _object(text) if text.startswith("{") else {"finding": _number("finding", text)}
+        return {"command": "ack", **fields}
     if subtopic == "regime":
         return {"command": "override", "regime": _regime(text)}
     field = "louver_deg" if subtopic == "louver_deg" else "or_pct"

@@ -13,6 +13,7 @@ topic                  retained  QoS     payload
 ``<base>/kpi``         yes       1       the last completed local day (:func:`daily_kpis`)
 ``<base>/cmd/...``     —         —       commands in (:mod:`~.commands`)
 ``<base>/error``       no        0       answers to refused commands (:mod:`~.receiver`)
+``<base>/finding/K``   yes       1       open findings of kind K (:func:`finding_messages`)
 =====================  ========  ======  =====================================================
 
 Home Assistant discovery follows the documented schema (home-assistant.io/integrations/mqtt,
@@ -34,6 +35,11 @@ platforms):
 * the faults ``binary_sensor`` has ``device_class: problem`` and compares the rendered
   template with ``payload_on``/``payload_off``; the occupancy ``binary_sensor`` likewise, with
   ``device_class: occupancy`` (the occupancy the comfort limits follow, issue 36);
+* one ``binary_sensor`` with ``device_class: problem`` per finding kind of the diagnostics
+  (:data:`~dsfd.estimation.lifecycle.FINDING_KINDS`, issue 38) reads ``<base>/finding/<kind>``:
+  ``value_template`` renders ``ON`` while a finding of the kind is open, else ``OFF`` (the
+  platform's default ``payload_on``/``payload_off``), and ``json_attributes_topic`` with
+  ``json_attributes_template`` gives the open findings with their evidence as attributes;
 * the day's comfort figures are sensors on the retained ``<base>/kpi`` topic
   (``value_json.comfort.*``): durations in min, the DGPs percentile without a unit, the
   share above the glare limit in %;
@@ -58,6 +64,7 @@ import numpy as np
 from dsfd.config import PanelConfig
 from dsfd.config.panel import REGIME_NAMES
 from dsfd.daemon.commands import OBJECTIVE_MODES
+from dsfd.estimation.lifecycle import FINDING_KINDS
 from dsfd.report.comfort_kpis import comfort_kpis
 from dsfd.report.kpis import local_dates
 from dsfd.signals import SENSOR_NAMES
@@ -68,6 +75,7 @@ __all__ = [
     "daily_kpis",
     "discovery_configs",
     "dumps",
+    "finding_messages",
     "local_day",
     "object_id",
     "regime_option",
@@ -368,6 +376,12 @@ def discovery_configs(cfg: PanelConfig, *, base_topic: str, discovery_prefix: st
         add("sensor", key, name, state_topic=f"{base_topic}/kpi",
             value_template=f"{{{{ value_json.comfort.{kpi} }}}}", state_class="measurement",
             icon=icon, **{k: v for k, v in fields.items() if v is not None})
+    for kind in FINDING_KINDS:
+        topic = f"{base_topic}/finding/{kind}"
+        add("binary_sensor", f"finding_{kind}", f"Finding: {kind.replace('_', ' ')}",
+            state_topic=topic, device_class="problem", value_template="{{ value_json.state }}",
+            payload_on="ON", payload_off="OFF", json_attributes_topic=topic,
+            json_attributes_template="{{ {'findings': value_json.findings} | tojson }}")
     cmd = f"{base_topic}/cmd"
     add("select", "regime", "Airflow regime", state_topic=state,
         value_template="{{ value_json.command.regime_option }}", command_topic=f"{cmd}/regime",
@@ -396,3 +410,20 @@ def discovery_configs(cfg: PanelConfig, *, base_topic: str, discovery_prefix: st
 def utc_iso(time_s: float) -> str:
     return (datetime(1970, 1, 1, tzinfo=UTC) + timedelta(seconds=time_s)).strftime(
         "%Y-%m-%dT%H:%M:%SZ")
+
+
+def finding_messages(base_topic: str, rows: Sequence[Mapping[str, Any]]
+                     ) -> list[tuple[str, str]]:
+    """(topic, payload) per finding kind: ``{"state": "ON"|"OFF", "findings": [...]}`` with
+    the open findings of that kind (``rows``: :func:`dsfd.storage.findings.open_findings`),
+    each with its id (for an ``ack``), subject, confidence, start, action and evidence."""
+    by_kind: dict[str, list[dict[str, Any]]] = {k: [] for k in FINDING_KINDS}
+    for r in rows:
+        by_kind.setdefault(str(r["kind"]), []).append({
+            "id": r["finding_id"], "subject": r["subject"],
+            "confidence": _finite(r["confidence"]), "start_utc": utc_iso(r["start_s"]),
+            "detected_utc": utc_iso(r["detected_s"]), "action": r["action"],
+            "evidence": r["evidence"]})
+    return [(f"{base_topic}/finding/{kind}",
+             dumps({"state": "ON" if found else "OFF", "findings": found}))
+            for kind, found in by_kind.items()]

@@ -42,11 +42,13 @@ from dsfd.integrations.mqtt.messages import (
     daily_kpis,
     discovery_configs,
     dumps,
+    finding_messages,
     local_day,
     state_message,
 )
 from dsfd.integrations.mqtt.outbox import Key, Outbox, Status
 from dsfd.integrations.mqtt.receiver import CommandReceiver
+from dsfd.storage.findings import open_findings
 from dsfd.storage.timeseries import iso_now
 
 if TYPE_CHECKING:
@@ -103,6 +105,8 @@ class MqttPublisher:
         self._dirty = False
         self._saved_at = 0.0
         self._kpi_checked: str | None = None
+        #: The finding payloads the broker has, by topic (cleared on each connection).
+        self._findings_sent: dict[str, str] = {}
         self._failures = 0
 
     # ------------------------------------------------------------------ the runner's hooks
@@ -237,6 +241,7 @@ class MqttPublisher:
                                                    version=self.version):
                 client.publish(topic, dumps(config), qos=1, retain=True)
         self._kpi_checked = None
+        self._findings_sent = {}
         self._save(force=True)
         while not self._stop.is_set() and not conn.lost.is_set():
             self._wake.wait(0.5)
@@ -248,6 +253,7 @@ class MqttPublisher:
             newest = self.outbox.newest_time_s() if self.outbox is not None else None
             self._send_more(client, newest_s=newest)
             self._publish_kpi(client, newest)
+            self._publish_findings(client)
             self._save()
             self._subscribed(conn)
         if self._stop.is_set() and not conn.lost.is_set():
@@ -365,6 +371,15 @@ class MqttPublisher:
         client.publish(f"{self.base}/kpi", dumps(kpis), qos=1, retain=True)
         self.status.kpi_day = day.isoformat()
         self._dirty = True
+
+    def _publish_findings(self, client: Client) -> None:
+        """The open findings per kind (retained), each topic when its payload changed."""
+        if self.outbox is None:
+            return
+        for topic, payload in finding_messages(self.base, open_findings(self.outbox.conn)):
+            if self._findings_sent.get(topic) != payload:
+                client.publish(topic, payload, qos=1, retain=True)
+                self._findings_sent[topic] = payload
 
     def _backlog(self) -> int:
         if self.outbox is None:

@@ -1,0 +1,126 @@
+"""The life of a finding: what the detectors see now against what is stored (pure).
+
+The daemon runs the detectors (:mod:`dsfd.estimation.diagnostics`,
+:mod:`dsfd.estimation.crosschecks`) every few minutes on its recent rows; each run gives the
+findings the evidence supports *now*. :func:`reconcile` turns that into changes of the
+stored findings (docs/model.md#findings):
+
+* a detection whose key (:func:`key_of`: the kind, and the signal of a one-signal kind) has
+  an **open** stored finding refreshes it (confidence, evidence, subject, the last time it
+  was seen);
+* a detection whose key was **acknowledged** by an operator stays closed while its
+  evidence started no later than the acknowledgement (the operator has seen it); evidence
+  that starts after it (a later change point, or a window of readings entirely after it)
+  is new, and opens a new finding;
+* any other detection opens a new finding;
+* an open finding the detectors no longer report **ends**: its evidence went away (only
+  when its detector ran: one that runs less often, or lacks the history, ends nothing).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Collection, Iterable, Sequence
+from dataclasses import dataclass, field
+
+from dsfd.estimation.diagnostics import Finding
+
+__all__ = ["ACKNOWLEDGED", "ENDED", "FINDING_KINDS", "OPEN", "Changes", "StoredFinding",
+           "key_of", "reconcile", "subject_of"]
+
+OPEN, ACKNOWLEDGED, ENDED = "open", "acknowledged", "ended"
+#: Every kind the detectors report (one Home Assistant problem sensor and one metric each).
+FINDING_KINDS = ("damper_no_flow", "cavity_no_flow", "cavity_flow_when_closed",
+                 "pane_out_of_bounds", "pane_offset_shift", "residual_shift", "parameter_shift")
+#: Kinds about one signal: the subject is the evidence's signal.
+_SIGNAL_KINDS = frozenset({"residual_shift", "parameter_shift", "pane_out_of_bounds",
+                           "pane_offset_shift"})
+
+
+def subject_of(f: Finding) -> str:
+    """What the finding is about: its own subject (the damper(s) of ``damper_no_flow``),
+    else the signal of a one-signal kind, else ''."""
+    if f.subject:
+        return f.subject
+    if f.kind in _SIGNAL_KINDS and f.evidence:
+        return f.evidence[0].signal
+    return ""
+
+
+def _key(kind: str, subject: str) -> tuple[str, str]:
+    # A one-signal kind is one finding per signal. The cavity cross-check reports one
+    # finding per check; the damper it names is refined as readings come in (a path seen
+    # flowing before the fault can first clear the stuck damper), so its kind alone is the
+    # key and the subject follows the latest check.
+    return (kind, subject) if kind in _SIGNAL_KINDS else (kind, "")
+
+
+def key_of(f: Finding) -> tuple[str, str]:
+    """What tells one finding from another: (kind, signal) for a one-signal kind, else
+    (kind, '')."""
+    return _key(f.kind, subject_of(f))
+
+
+@dataclass(frozen=True, kw_only=True)
+class StoredFinding:
+    """What :func:`reconcile` needs of a stored finding.
+
+    ``closed_s``: when it was acknowledged or ended [s] (None while open).
+    """
+
+    finding_id: int
+    kind: str
+    subject: str
+    state: str
+    start_s: float
+    closed_s: float | None = None
+
+    @property
+    def key(self) -> tuple[str, str]:
+        return _key(self.kind, self.subject)
+
+
+@dataclass
+class Changes:
+    """``opened``: new findings; ``refreshed``: (id, the detection now) of open ones;
+    ``ended``: ids of open ones whose evidence went away; ``kept_closed``: (id of the
+    acknowledged finding, the detection it covers)."""
+
+    opened: list[Finding] = field(default_factory=list)
+    refreshed: list[tuple[int, Finding]] = field(default_factory=list)
+    ended: list[int] = field(default_factory=list)
+    kept_closed: list[tuple[int, Finding]] = field(default_factory=list)
+
+
+def reconcile(detected: Iterable[Finding], stored: Sequence[StoredFinding], *,
+              judged: Collection[str] | None = None) -> Changes:
+    """The changes that take the ``stored`` findings to what ``detected`` says now.
+
+    ``stored`` holds at least every open finding and, per key, the latest acknowledged one
+    (older rows change nothing). Two detections with one key: the first counts. ``judged``:
+    the kinds whose detectors ran (None: all); an open finding of a kind not judged this
+    time keeps its state (a detector that did not run has not seen the evidence go).
+    """
+    out = Changes()
+    open_by_key = {s.key: s for s in stored if s.state == OPEN}
+    acked: dict[tuple[str, str], StoredFinding] = {}
+    for s in stored:
+        if s.state == ACKNOWLEDGED and (s.key not in acked
+                                        or s.finding_id > acked[s.key].finding_id):
+            acked[s.key] = s
+    seen: set[tuple[str, str]] = set()
+    for f in detected:
+        key = key_of(f)
+        if key in seen:
+            continue
+        seen.add(key)
+        if key in open_by_key:
+            out.refreshed.append((open_by_key[key].finding_id, f))
+            continue
+        ack = acked.get(key)
+        if ack is not None and ack.closed_s is not None and f.start_s <= ack.closed_s:
+            out.kept_closed.append((ack.finding_id, f))
+            continue
+        out.opened.append(f)
+    out.ended = [s.finding_id for k, s in open_by_key.items()
+                 if k not in seen and (judged is None or s.kind in judged)]
+    return out

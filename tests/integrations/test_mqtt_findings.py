@@ -1,0 +1,162 @@
+"""Findings over MQTT, end to end (issue 38): a real ``dsfd run`` whose simulated plant has
+damper IT stuck shut from 30 min in, beside a real Mosquitto.
+
+* The daemon's own diagnostics find the stuck damper (IT, or "EB, IT" while the supply path
+  is the only one tried) and publish it, retained, on its Home
+  Assistant problem sensor's topic ``<base>/finding/damper_no_flow`` (state ``ON``, the
+  finding with its evidence as the attributes); the metrics file's
+  ``dsfd_finding_open{kind="damper_no_flow"}`` is 1.
+* ``dsfd ack`` of a finding that does not exist is rejected by the daemon and changes
+  nothing; malformed ``<base>/cmd/ack`` payloads are answered on ``<base>/error`` and change
+  nothing, and an ack of an id that is no finding is filed, rejected by the daemon and
+  answered there with its command id.
+* ``mosquitto_pub`` of the finding's id on ``<base>/cmd/ack`` closes it: the topic turns
+  ``OFF``, the gauge 0, the row ``acknowledged``; and while the same evidence lasts (the
+  damper stays stuck to the end of the run, the checks go on) it stays closed.
+
+Cycles are paced (``--speed``): 60 simulated seconds every 0.25 s. Time limits are hang
+guards.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import pytest
+from prometheus_client.parser import text_string_to_metric_families
+
+from dsfd.daemon.commands import CommandError, validate_command
+from dsfd.integrations.mqtt.broker import LocalBroker
+from dsfd.integrations.mqtt.commands import request_of
+from tests.daemon.harness import DaemonProcess, query, run_dsfd
+from tests.integrations.mqtt_harness import Message, Subscriber, mqtt_panel, run_args
+from tests.integrations.test_mqtt_commands import commands, publish
+
+START = "2022-01-01T23:30:00Z"  # 08:30 in Suwon, January (as the stuck-damper dry run)
+PANEL = "suwon-south"
+BASE = f"dsfd/{PANEL}"
+TOPIC = f"{BASE}/finding/damper_no_flow"
+#: Hang guards [s]: the finding needs about 100 cycles (25 s paced) after the start.
+FIND_LIMIT_S = 150.0
+POLL_LIMIT_S = 60.0
+
+
+def _latest(messages: list[Message], topic: str) -> dict[str, Any] | None:
+    found = [m for m in messages if m.topic == topic]
+    return found[-1].json() if found else None
+
+
+def _it_finding(messages: list[Message]) -> dict[str, Any] | None:
+    """The open damper finding once it names IT (alone, or with the other damper of the
+    only path tried so far)."""
+    last = _latest(messages, TOPIC)
+    if last is None or last["state"] != "ON":
+        return None
+    return next((f for f in last["findings"] if "IT" in f["subject"].split("+")), None)
+
+
+def _gauge(prom: Path, kind: str) -> float | None:
+    try:
+        text = prom.read_text()
+    except FileNotFoundError:
+        return None
+    for family in text_string_to_metric_families(text):
+        for s in family.samples:
+            if s.name == "dsfd_finding_open" and s.labels.get("kind") == kind:
+                return s.value
+    return None
+
+
+async def _until(predicate: Any, limit_s: float = POLL_LIMIT_S) -> Any:
+    async with asyncio.timeout(limit_s):
+        while not (got := predicate()):
+            await asyncio.sleep(0.1)
+        return got
+
+
+def test_a_stuck_damper_is_published_as_a_problem_and_an_ack_over_mqtt_closes_it(
+        broker: LocalBroker, tmp_path: Path) -> None:
+    prom = tmp_path / "dsfd-test.prom"
+    panel = mqtt_panel(tmp_path / "panel.yaml", broker,
+                       extra={"daemon": {"metrics_file": str(prom)}})
+    state = tmp_path / "state"
+    db = state / "timeseries.sqlite"
+    sub = Subscriber(broker, f"{BASE}/finding/#", f"{BASE}/error",
+                     out=tmp_path / "sub.txt").start()
+    seen: dict[str, Any] = {}
+
+    async def scenario() -> None:
+        d = await DaemonProcess([*run_args(panel, state, start=START, cycles=190, speed=240.0),
+                                 "--fault", "damper-stuck.IT:+30min:0"]).start()
+        finding = await _until(lambda: _it_finding(sub.messages()), FIND_LIMIT_S)
+        seen["finding"] = finding
+        seen["open_gauge"] = await _until(lambda: _gauge(prom, "damper_no_flow") == 1.0)
+        # a finding that does not exist: the daemon answers, nothing changes
+        seen["bad_ack"] = await run_dsfd("ack", "--config", str(panel), "--state-dir",
+                                         str(state), "999", "--wait", "30")
+        # malformed payloads: answered on <base>/error, nothing filed
+        for payload in ("abc", '{"finding": 0}', "2.5", '{"finding": 1, "x": 2}'):
+            publish(broker, f"{BASE}/cmd/ack", payload)
+        await _until(lambda: len([m for m in sub.messages()
+                                  if m.topic == f"{BASE}/error"]) >= 4)
+        # well-formed, but no such finding: filed, rejected by the loop, answered
+        publish(broker, f"{BASE}/cmd/ack", "999")
+        await _until(lambda: len([m for m in sub.messages()
+                                  if m.topic == f"{BASE}/error"]) >= 5)
+        publish(broker, f"{BASE}/cmd/ack", str(finding["id"]))
+        seen["closed"] = await _until(lambda: (_latest(sub.messages(), TOPIC) or {}).get(
+            "state") == "OFF")
+        seen["closed_gauge"] = await _until(lambda: _gauge(prom, "damper_no_flow") == 0.0)
+        assert await d.wait_exit() == 0, d.stderr_now()  # the run ends by itself
+
+    try:
+        asyncio.run(scenario())
+    finally:
+        sub.stop()
+    f = seen["finding"]
+    # the finding as Home Assistant's attributes show it: id, damper, action, evidence
+    named = ", ".join(f["subject"].split("+"))
+    assert f"check damper {named}" in f["action"] and 0.5 <= f["confidence"] <= 1.0
+    assert f["evidence"] and all("IT" in e["signal"] and e["unit"] == "m/s"
+                                 for e in f["evidence"])
+    rc, out, err = seen["bad_ack"]
+    assert rc == 1 and "rejected" in out and "finding: 999: no such finding" in out, (out, err)
+    errors = [json.loads(m.payload) for m in sub.messages() if m.topic == f"{BASE}/error"]
+    assert [e["payload"] for e in errors] == ["abc", '{"finding": 0}', "2.5",
+                                              '{"finding": 1, "x": 2}', "999"]
+    assert all(e["topic"] == f"{BASE}/cmd/ack" and e["reason"] for e in errors)
+    assert [e["command_id"] is None for e in errors] == [True] * 4 + [False]
+    assert "no such finding" in errors[-1]["reason"]
+    cmds = commands(db)
+    assert [(c["kind"], c["source"], c["status"]) for c in cmds] == [
+        ("ack", "cli", "rejected"), ("ack", "mqtt", "rejected"), ("ack", "mqtt", "applied")]
+    assert errors[-1]["command_id"] == cmds[1]["command_id"]
+    ack = cmds[2]
+    assert json.loads(ack["args"]) == {"finding": f["id"]}
+    # closed by that command, and still closed at the end although the damper stayed stuck
+    # and the checks went on seeing it (no new start: the same evidence)
+    row = query(db, "SELECT state, ack_command_id, end_reason FROM findings WHERE "
+                    "finding_id = ?", f["id"])[0]
+    assert row[:2] == ("acknowledged", ack["command_id"]) and "mqtt" in row[2]
+    assert query(db, "SELECT COUNT(*) FROM findings WHERE kind = 'damper_no_flow' AND "
+                     "state = 'open'") == [(0,)]
+    last_check = query(db, "SELECT MAX(time_s) FROM decisions")[0][0]
+    assert last_check - query(db, "SELECT time_s FROM decisions WHERE cycle = ?",
+                              ack["cycle"])[0][0] >= 20 * 60  # two checks or more after it
+    assert _latest(sub.messages(), TOPIC)["state"] == "OFF"
+
+
+def test_ack_payloads_map_to_requests_and_malformed_ones_name_the_problem() -> None:
+    assert request_of("ack", b"3") == {"command": "ack", "finding": 3}
+    assert request_of("ack", b'{"finding": 12}') == {"command": "ack", "finding": 12}
+    # the one validation of every source: a whole number from 1, nothing else
+    assert validate_command(None, {"command": "ack", "finding": "7"}).finding == 7  # the CLI
+    for bad in (0, -1, 2.5, True, math.nan, math.inf, None, "x", [], 2**63, "9" * 30):
+        with pytest.raises(CommandError, match="finding"):
+            validate_command(None, {"command": "ack", "finding": bad})
+    with pytest.raises(CommandError, match="unknown field"):
+        validate_command(None, {"command": "ack", "finding": 1, "hold": "2h"})
