@@ -49,7 +49,8 @@ class StatePrediction:
     ----------
     x_k : ndarray (6,), [K]
         Predicted readings of x1..x5 at this cycle (the cavity-air probe's for x5,
-        docs/model.md#cavity-probe) and x6.
+        docs/model.md#cavity-probe; with the regime's reading offsets,
+        docs/model.md#reading-offsets) and x6.
     v_cav_ms : float, [m/s]
         Predicted mean cavity speed over the step, unsigned (the anemometer reads |v|).
     heat_w : dict
@@ -174,7 +175,6 @@ class StateObserver:
         self._x = x if np.all(np.isfinite(x)) else None
         return StateEstimate(x, tuple(int(min(a, _NEVER)) for a in self._age), not why, why,
                              prediction)
-
 
     def _track_offsets(self, regime: int, innovation_k: np.ndarray) -> None:
         cal = self.model.cfg.calibration
