@@ -14,7 +14,7 @@ damper IT stuck shut from 30 min in, beside a real Mosquitto.
   ``OFF``, the gauge 0, the row ``acknowledged``; and while the same evidence lasts (the
   damper stays stuck to the end of the run, the checks go on) it stays closed.
 
-Cycles are paced (``--speed``): 60 simulated seconds every 0.25 s. Time limits are hang
+Cycles are paced (``--speed``): 60 simulated seconds every 0.125 s. Time limits are hang
 guards.
 """
 
@@ -90,7 +90,7 @@ def test_a_stuck_damper_is_published_as_a_problem_and_an_ack_over_mqtt_closes_it
     seen: dict[str, Any] = {}
 
     async def scenario() -> None:
-        d = await DaemonProcess([*run_args(panel, state, start=START, cycles=190, speed=240.0),
+        d = await DaemonProcess([*run_args(panel, state, start=START, cycles=190, speed=480.0),
                                  "--fault", "damper-stuck.IT:+30min:0"]).start()
         finding = await _until(lambda: _it_finding(sub.messages()), FIND_LIMIT_S)
         seen["finding"] = finding
