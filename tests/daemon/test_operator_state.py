@@ -34,6 +34,16 @@ def sim_args(panel: Path, state: Path, cycles: int, *more: str) -> list[str]:
             str(state), *more]
 
 
+def run_to_end(panel: Path, state: Path, cycles: int) -> DaemonProcess:
+    """A lumped dry run of ``cycles`` cycles that must end by itself with status 0."""
+    async def run() -> DaemonProcess:
+        daemon = await DaemonProcess(sim_args(panel, state, cycles)).start()
+        assert await daemon.wait_exit() == 0, daemon.stderr
+        return daemon
+
+    return asyncio.run(run())
+
+
 def test_a_second_daemon_on_the_same_state_directory_exits_3_naming_the_holder(
         tmp_path: Path) -> None:
     panel = write_panel(tmp_path / "sim.yaml", devices=False)
@@ -197,17 +207,12 @@ def test_a_hold_survives_a_restart(tmp_path: Path) -> None:
     state = tmp_path / "state"
     db = state / "timeseries.sqlite"
 
-    async def run(cycles: int) -> DaemonProcess:
-        daemon = await DaemonProcess(sim_args(panel, state, cycles)).start()
-        assert await daemon.wait_exit() == 0, daemon.stderr
-        return daemon
-
     Store.open(state).close()  # the database the service would have created
     # Queued the way the CLI queues it (the CLI itself insists on a running daemon).
     cid = submit(db, kind="override", args={"hold": "2h", "louver_deg": 54},
                  source="cli", requester="test@host")
-    asyncio.run(run(3))
-    daemon = asyncio.run(run(3))
+    run_to_end(panel, state, 3)
+    daemon = run_to_end(panel, state, 3)
     rows = query(db, "SELECT run_id, cycle, method, phi_deg, hold_source, hold_command_id, "
                  "hold_expires_s, write_status FROM decisions ORDER BY run_id, cycle")
     assert [r[:2] for r in rows] == [(1, 1), (1, 2), (1, 3), (2, 1), (2, 2), (2, 3)]
@@ -232,16 +237,11 @@ def test_an_occupancy_override_survives_a_restart(tmp_path: Path) -> None:
     state = tmp_path / "state"
     db = state / "timeseries.sqlite"
 
-    async def run(cycles: int) -> DaemonProcess:
-        daemon = await DaemonProcess(sim_args(panel, state, cycles)).start()
-        assert await daemon.wait_exit() == 0, daemon.stderr
-        return daemon
-
     Store.open(state).close()
     cid = submit(db, kind="occupancy", args={"state": "unoccupied", "until": "10:00"},
                  source="cli", requester="test@host")
-    asyncio.run(run(3))
-    daemon = asyncio.run(run(3))
+    run_to_end(panel, state, 3)
+    daemon = run_to_end(panel, state, 3)
     rows = query(db, "SELECT d.run_id, d.cycle, d.occupancy_override, d.occupancy_until_s, "
                  "d.occupancy_command_id, c.occupied, c.occupancy_source FROM decisions d "
                  "JOIN comfort c USING (run_id, cycle) ORDER BY run_id, cycle")
