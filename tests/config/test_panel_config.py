@@ -107,6 +107,19 @@ def test_innovation_smoothing_needs_one_time_constant_per_offset_node():
     cfg = panel_from_mapping(d, source="test.yaml")
     assert cfg.calibration.innovation_smoothing_s == (0.0, 3600.0, 3600.0, 0.0)
 
+
+def test_reading_offsets_need_one_time_constant_per_measured_state():
+    d = _suwon_dict()
+    d["calibration"] = {"reading_offset_tracking_s": [0, 0, 120, 120]}
+    issues = _issues(d)
+    assert "[0.0, 0.0, 120.0, 120.0]" in issues["calibration.reading_offset_tracking_s"]
+    assert "one time constant per measured state" in \
+        issues["calibration.reading_offset_tracking_s"]
+    d["calibration"] = {"reading_offset_tracking_s": [0, 0, 0, -1, 120]}
+    assert "-1" in _issues(d)["calibration.reading_offset_tracking_s[3]"]
+    d["calibration"] = {"reading_offset_memory_s": 0}
+    assert "calibration.reading_offset_memory_s" in _issues(d)
+
 def test_booleans_are_not_numbers_and_ints_are_not_strings():
     d = _suwon_dict()
     d["model"]["step_s"] = True
