@@ -33,8 +33,11 @@ def mosquitto_missing() -> str:
 
 def mqtt_panel(path: Path, broker: LocalBroker, *, password: str | None = None,
                panel_id: str | None = None, mqtt: Mapping[str, Any] | None = None,
-               extra: Mapping[str, Any] | None = None) -> Path:
-    """A simulation panel file publishing to ``broker``; the password in a file next to it."""
+               extra: Mapping[str, Any] | None = None, tcp_port: int | None = None,
+               station_port: str | None = None) -> Path:
+    """A panel file publishing to ``broker``; the password in a file next to it. Without
+    ``tcp_port`` it has no devices (a dry run); with it, the I/O module on that loopback port
+    and the station on ``station_port`` (a HIL run)."""
     secret = path.with_name(path.stem + "-password")
     secret.write_text((broker.password if password is None else password) + "\n")
     section = {"host": "127.0.0.1", "port": broker.port, "username": broker.username,
@@ -43,7 +46,8 @@ def mqtt_panel(path: Path, broker: LocalBroker, *, password: str | None = None,
     doc: dict[str, Any] = {"mqtt": section, **(extra or {})}
     if panel_id is not None:
         doc["panel"] = {"id": panel_id}
-    return write_panel(path, devices=False, extra=doc)
+    return write_panel(path, devices=tcp_port is not None, tcp_port=tcp_port,
+                       station_port=station_port, extra=doc)
 
 
 def run_args(panel: Path, state: Path, *, start: str, cycles: int, speed: float) -> list[str]:
