@@ -174,6 +174,26 @@ def _bench_identify(args: argparse.Namespace) -> dict[str, Any]:
         keep_state=args.keep_state)
 
 
+def _bench_diagnostics(args: argparse.Namespace) -> dict[str, Any]:
+    from dsfd.bench.diagnostics import SEASONS, bench_diagnostics, report
+
+    seeds = ((1, 2, 3) if args.seeds is None else
+             tuple(range(1, args.seeds + 1)) if isinstance(args.seeds, int) else args.seeds)
+    figures = bench_diagnostics(
+        args.config, seeds=seeds, clean_days=10.0 if args.days is None else args.days,
+        seasons=SEASONS if args.seasons is None else tuple(
+            s.strip() for s in args.seasons.split(",") if s.strip()),
+        names=None if args.scenarios is None else tuple(
+            s.strip() for s in args.scenarios.split(",") if s.strip()),
+        keep=args.keep_state,
+        progress=lambda msg: print(msg, file=sys.stderr, flush=True),
+        on_figures=None if args.json is None else lambda fig: _write_json(
+            args.json, args.target, {**fig, "partial": 1.0}))
+    print(report(figures))
+    print()
+    return figures
+
+
 #: Benchmark targets: name → function(args) → flat figures.
 TARGETS: dict[str, Callable[[argparse.Namespace], dict[str, Any]]] = {
     "model": _bench_model,
@@ -187,13 +207,16 @@ TARGETS: dict[str, Callable[[argparse.Namespace], dict[str, Any]]] = {
     "paper-tables": _bench_paper_tables,
     "closed-loop": _bench_closed_loop,
     "identify": _bench_identify,
+    "diagnostics": _bench_diagnostics,
 }
 #: Targets that print their own tables (their figures are too many to list one a line).
-OWN_TABLES = frozenset({"identify"})
+OWN_TABLES = frozenset({"identify", "diagnostics"})
 #: ``identify`` defaults: the seeds and days of issue 35's targets.
 IDENTIFY_SEEDS, IDENTIFY_DAYS = 5, 3.0
-#: Options only ``identify`` takes.
-IDENTIFY_ONLY = ("plant", "sensors", "protocol", "keep_state")
+#: Options only ``identify`` takes (``keep_state``: and ``diagnostics``).
+IDENTIFY_ONLY = ("plant", "sensors", "protocol")
+#: Options only ``diagnostics`` takes.
+DIAGNOSTICS_ONLY = ("seasons", "scenarios")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -208,7 +231,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "10,000 one-minute cycles; paper-tables: 3 scored days after the "
                    "training day; plant-velocity: the paper's 8-11 Dec 2008, or with "
                    "--weather from the record's second day to its end; closed-loop: 1 scored "
-                   "day per case; identify: 3 days per seed)")
+                   "day per case; identify: 3 days per seed; diagnostics: the clean run's 10 days)")
     p.add_argument("--seed", type=int, default=0, help="seed of the target's randomness "
                    "(identify: the first seed of --seeds)")
     p.add_argument("--cases", type=int, default=200,
@@ -218,7 +241,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "10); paper-tables: run seeds 0..N-1 and print the per-seed cavity-speed "
                    "table; identify and closed-loop: run seeds SEED..SEED+N-1 (identify: "
                    "default 5); closed-loop also takes a list such as 1,2,3, and prints the "
-                   "share per case and seed")
+                   "share per case and seed; diagnostics: seeds 1..N or a list (default "
+                   "1,2,3)")
     p.add_argument("--oracle-cache", type=Path, default=None, metavar="FILE",
                    help="closed-loop: take the plant oracle's figures from FILE where it has "
                    "them for the case, seed, days, weather and panel, and store new ones there "
@@ -261,7 +285,13 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "30-90 min (default); closed-loop = the daemon's own decisions")
     p.add_argument("--keep-state", type=Path, default=None, metavar="DIR",
                    help="identify: keep each seed's daemon state directory as DIR/seed<N> "
-                   "(for dsfd report; default: temporary)")
+                   "(for dsfd report; default: temporary); diagnostics: each run's as "
+                   "DIR/<season>.<scenario>.seed<N>")
+    p.add_argument("--seasons", default=None, metavar="LIST",
+                   help="diagnostics: winter, cooling or both (default winter,cooling)")
+    p.add_argument("--scenarios", default=None, metavar="LIST",
+                   help="diagnostics: some of stuck-damper, louver-slip, tc-offset, tc-drift, "
+                   "soiling, screen, clean (default all)")
     p.add_argument("--json", type=Path, default=None, help="write the figures as JSON "
                    "(identify: rewritten after every seed)")
     p.set_defaults(handler=run)
@@ -289,9 +319,9 @@ def _write_json(path: Path, target: str, figures: dict[str, Any]) -> None:
 
 def run(args: argparse.Namespace) -> int:
     if isinstance(args.seeds, tuple):
-        if args.target != "closed-loop":
+        if args.target not in ("closed-loop", "diagnostics"):
             print(f"dsfd bench {args.target}: --seeds takes a count N (seeds 0..N-1); a list "
-                  "of seeds is for closed-loop", file=sys.stderr)
+                  "of seeds is for closed-loop and diagnostics", file=sys.stderr)
             return 2
         if min(args.seeds, default=-1) < 0:
             print(f"dsfd bench: --seeds {args.seeds}: seeds are 0 or more", file=sys.stderr)
@@ -306,12 +336,18 @@ def run(args: argparse.Namespace) -> int:
     if args.fault and args.target != "closed-loop":
         print("dsfd bench: --fault only applies to the closed-loop target", file=sys.stderr)
         return 2
-    if args.target != "identify":
-        for name in IDENTIFY_ONLY:
+    only = {"identify": IDENTIFY_ONLY, "diagnostics": DIAGNOSTICS_ONLY}
+    if args.keep_state is not None and args.target not in only:
+        print("dsfd bench: --keep-state only applies to the identify and diagnostics targets",
+              file=sys.stderr)
+        return 2
+    for target, names in only.items():
+        if args.target == target:
+            continue
+        for name in names:
             if getattr(args, name) is not None:
                 print(f"dsfd bench: --{name.replace('_', '-')} only applies to the "
-                      "identify target",
-                      file=sys.stderr)
+                      f"{target} target", file=sys.stderr)
                 return 2
     try:
         figures = TARGETS[args.target](args)

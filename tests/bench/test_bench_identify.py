@@ -258,7 +258,8 @@ def test_determined_follows_the_posterior_over_the_last_day_and_errors_use_it_to
     (["identify", "--seeds", "0"], "--seeds 0: must be positive"),
     (["identify", "--days", "-1"], "--days -1.0: must be positive"),
     (["plant", "--protocol", "paper"], "--protocol only applies to the identify target"),
-    (["daemon", "--keep-state", "x"], "--keep-state only applies to the identify target"),
+    (["daemon", "--keep-state", "x"],
+     "--keep-state only applies to the identify and diagnostics targets"),
 ])
 def test_bad_options_exit_2_naming_them(args, named, capsys):
     assert main(["bench", *args]) == 2
