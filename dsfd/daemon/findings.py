@@ -54,7 +54,7 @@ __all__ = ["CHECK_EVERY_S", "CROSSCHECK_WINDOW_S", "DAMPER_SHORT", "FindingsStag
 log = get_logger("dsfd.findings")
 
 #: How often the detectors run, on the daemon's clock [s].
-CHECK_EVERY_S = 600.0
+CHECK_EVERY_S = 300.0
 #: The cross-checks judge the last day: long enough that every path the controller uses in
 #: a day is judged, so a finding does not end at night only because no path was used.
 CROSSCHECK_WINDOW_S = 86400.0

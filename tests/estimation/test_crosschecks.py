@@ -34,8 +34,30 @@ def test_a_damper_that_no_flowing_path_uses_is_named():
     ev, = f.evidence
     assert ev.signal == "crosscheck:v_cav_ms[EB+ET]" and ev.unit == "m/s"
     assert ev.statistic < ev.threshold
-    assert ev.since_s == t[sets.index(EXT)]
+    # judged on the path's latest 20 readings: the evidence starts at the first of them
+    last_ext = max(i for i, x in enumerate(sets) if x == EXT)
+    assert ev.since_s == t[last_ext - 19]
     assert f.confidence > 0.9
+
+
+def test_a_damper_that_sticks_after_its_path_flowed_is_found_on_the_recent_readings():
+    """EB sticks shut after the exterior path flowed for two hours: the day's median of the
+    path is still that of a flowing path, its latest readings are not."""
+    t, v, sets, drive = _flow_day({CLOSED: 0.02, EXT: 0.25, INT: 0.20})
+    stuck_t, stuck_v, stuck_sets, stuck_drive = _flow_day({EXT: 0.0}, seed=2, n=15)
+    t = np.concatenate([t, stuck_t + (t[-1] - T0) + 60.0])
+    v = np.concatenate([v, stuck_v])
+    sets, drive = sets + stuck_sets, np.concatenate([drive, stuck_drive])
+    ext = np.array([s == EXT for s in sets])
+    assert np.median(v[ext]) > 0.2  # the whole day's readings of the path: flowing
+    f = cavity_flow_check(t, v, sets, drive)
+    assert f is not None and f.kind == "damper_no_flow" and "check damper" in f.action
+    assert set(f.subject.split("+")) <= {"EB", "ET"}  # no flowing path uses them
+    # the median of the latest 20 turns once 11 of them are dead: 10 are not enough
+    for dead, found in ((10, False), (11, True)):
+        end = len(sets) - 15 + dead
+        f = cavity_flow_check(t[:end], v[:end], sets[:end], drive[:end])
+        assert (f is not None) == found, dead
 
 
 def test_a_healthy_cavity_gives_nothing():
