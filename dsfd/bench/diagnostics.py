@@ -37,8 +37,8 @@ import yaml
 
 from dsfd.config.panel import REGIME_OPENINGS
 
-__all__ = ["NAMES", "PREFIX_DAYS", "SEASONS", "Scenario", "bench_diagnostics", "report",
-           "scenarios", "score"]
+__all__ = ["NAMES", "PREFIX_DAYS", "SEASONS", "Scenario", "aalborg_findings",
+           "bench_diagnostics", "report", "scenarios", "score"]
 
 SECONDS_PER_DAY = 86400.0
 #: Clean days before a fault that one of the history-hungry detectors must find.
@@ -255,13 +255,16 @@ def _run(config: Path, scenario: Scenario, *, seed: int, weather: str | None, st
 
 def bench_diagnostics(config: Path, *, seeds: Sequence[int], seasons: Sequence[str] = SEASONS,
                       names: Iterable[str] | None = None, clean_days: float = 10.0,
-                      keep: Path | None = None,
+                      keep: Path | None = None, aalborg: Path | None = None,
+                      aalborg_panel: Path | None = None,
                       progress: Callable[[str], None] | None = None,
                       on_figures: Callable[[dict[str, float | str]], None] | None = None
                       ) -> dict[str, float | str]:
     """Run the scenarios (:func:`scenarios`, those in ``names``) for every season and seed,
     one after another; flat figures ``<season>.<scenario>.seed<N>.<figure>``, handed to
-    ``on_figures`` after each run. ``keep``: keep each run's state directory there."""
+    ``on_figures`` after each run. ``keep``: keep each run's state directory there.
+    ``aalborg``: the Aalborg "Cube" source folder, scored first (:func:`aalborg_findings`,
+    with ``aalborg_panel``, by default ``aalborg-cube.yaml`` beside ``config``)."""
     unknown = sorted(set(seasons) - set(SEASONS))
     if unknown:
         raise ValueError(f"unknown season(s) {', '.join(unknown)}; choose from "
@@ -274,6 +277,13 @@ def bench_diagnostics(config: Path, *, seeds: Sequence[int], seasons: Sequence[s
     plan = [s for s in table if s.name in chosen]
     figures: dict[str, float | str] = {"seeds": ",".join(map(str, seeds)),
                                        "seasons": ",".join(seasons)}
+    if aalborg is not None:
+        if progress:
+            progress(f"aalborg: replaying {aalborg} with the self-calibrating model")
+        figures.update(aalborg_findings(aalborg_panel or config.parent / "aalborg-cube.yaml",
+                                        aalborg))
+        if on_figures:
+            on_figures(dict(figures))
     with tempfile.TemporaryDirectory(prefix="dsfd-bench-diag-") as tmp:
         root = keep or Path(tmp)
         root.mkdir(parents=True, exist_ok=True)
@@ -294,6 +304,36 @@ def bench_diagnostics(config: Path, *, seeds: Sequence[int], seasons: Sequence[s
                     if on_figures:
                         on_figures(dict(figures))
     return figures
+
+
+def aalborg_findings(panel: Path, source_dir: Path) -> dict[str, float | str]:
+    """False findings of the residual detector on the real Aalborg "Cube" week.
+
+    The record (``dsfd convert-aalborg``) is replayed with the self-calibrating model as
+    ``dsfd validate`` does; the residual detector with the daemon's settings runs on the
+    one-step prediction errors of each measured pane over the whole week (the daemon's
+    last check of such a week sees the same rows; the detector reports its first change
+    anywhere in them). The record has no cavity speed and a week of nights is too short
+    for the night check, so the other detectors have nothing to judge. Every finding is
+    false: the façade did not change during the measurements.
+    """
+    from dsfd.config import load_panel
+    from dsfd.convert.aalborg import convert_aalborg
+    from dsfd.estimation.diagnostics import residual_change
+    from dsfd.estimation.stepdata import step_data
+    from dsfd.estimation.validation import replay_scores
+
+    cfg = load_panel(panel)
+    steps = step_data(cfg, convert_aalborg(source_dir))
+    replay = replay_scores(cfg, steps, horizons=(1,))
+    t = replay.one_step_time_s
+    found = [f for name, err in replay.one_step_error_k.items()
+             if (f := residual_change(t, err, signal=f"{name}_c", unit="K")) is not None]
+    return {"aalborg.days": float((t[-1] - t[0]) / SECONDS_PER_DAY) if t.size else 0.0,
+            "aalborg.outputs": ",".join(replay.one_step_error_k),
+            "aalborg.false_findings": float(len(found)),
+            "aalborg.false_kinds": ",".join(f"{f.kind}:{f.evidence[0].signal}"
+                                            for f in found)}
 
 
 def report(figures: dict[str, float | str]) -> str:
@@ -323,6 +363,12 @@ def report(figures: dict[str, float | str]) -> str:
                      f"{float(f.get('false_findings', 0.0)):5.0f} "
                      f"{float(f.get('clean_days', 0.0)):7.2f}")
     lines.append(f"false findings: {total_false:.0f} over {total_days:.2f} clean simulated days")
+    if "aalborg.false_findings" in figures:
+        lines.append(f"Aalborg Cube (real, residual detector on {figures['aalborg.outputs']}): "
+                     f"{float(figures['aalborg.false_findings']):.0f} false findings over "
+                     f"{float(figures['aalborg.days']):.1f} days"
+                     + (f" ({figures['aalborg.false_kinds']})"
+                        if figures["aalborg.false_kinds"] else ""))
     return "\n".join(lines)
 
 

@@ -191,6 +191,12 @@ class ReplayScores:
     velocity : dict regime → RegimeVelocity
     final_theta : dict model → ndarray (13,)
         The last fit vector of ``online`` and ``offline``.
+    one_step_time_s : ndarray (S,), [s]
+        Time of the row each one-step prediction is for (a scored start's next row).
+    one_step_error_k : dict state → ndarray (S,), [K]
+        The first model's (``online`` when run) one-step prediction errors, measured minus
+        predicted, NaN where the state was not measured: what the daemon's residual
+        detector watches (docs/model.md#diagnostics-residuals).
     """
 
     steps: int
@@ -202,6 +208,8 @@ class ReplayScores:
     measured_mean_c: dict[str, float] = field(default_factory=dict)
     velocity: dict[int, RegimeVelocity] = field(default_factory=dict)
     final_theta: dict[str, np.ndarray] = field(default_factory=dict)
+    one_step_time_s: np.ndarray = field(default_factory=lambda: np.empty(0))
+    one_step_error_k: dict[str, np.ndarray] = field(default_factory=dict)
 
     def mae_c(self, model: str, horizon: int, state: str) -> float | None:
         """Table 2 cell; ``state`` ``"mean"`` for the mean over the states (None if absent)."""
@@ -311,7 +319,10 @@ def replay_scores(cfg: PanelConfig, steps: StepData, *, offline_theta: np.ndarra
         velocity=(_velocity_scores(steps, starts, preds, reference_v_ms)
                   if "v" in steps.present else {}),
         final_theta={m: theta_k[i, -1] for i, m in enumerate(names)
-                     if m in ("online", "offline")})
+                     if m in ("online", "offline")},
+        one_step_time_s=steps.time_s[starts + 1],
+        one_step_error_k={STATES[j]: steps.y_k[starts + 1, j] - preds[names[0]][0][:, 1, j]
+                          for j in present})
 
 
 def _scored_starts(steps: StepData, h_max: int, warmup_h: float) -> np.ndarray:
