@@ -84,8 +84,8 @@ def build_diagnostics(history: History, config: Mapping[str, Any] | None, *, off
                 no_figure[fid] = f"not drawn: the report draws at most {MAX_FIGURES}"
                 continue
             fig = evidence_figure(conn, row, offset_h=offset_h, config=config)
-            if fig is None:
-                no_figure[fid] = f"no figure for a {row['kind']} finding"
+            if isinstance(fig, str):
+                no_figure[fid] = fig
                 continue
             figures[fid] = ReportFigure(f"finding-{fid}", _title(row), _caption(row),
                                         png(fig, dpi))
@@ -115,13 +115,16 @@ def _caption(row: Mapping[str, Any]) -> str:
     else:
         what = ("Each reading of the cavity speed with the dampers the command in force "
                 "during that step opened (the day the latest check judged), and the commanded "
-                "regime and opening; an open path must move more air than the threshold.")
+                "regime and opening; an open path must move more air than the threshold. A "
+                "cross-check's start is the first reading of a dead path in the window it "
+                "judged, which can precede the fault.")
     return f"{what} Marked: the finding's start and detection as stored."
 
 
 # --------------------------------------------------------------------------------- HTML
 def _time(t: float | None) -> str:
-    return "–" if t is None else iso_utc(round(float(t)))
+    """UTC to the minute (the cycles are a minute or more apart)."""
+    return "–" if t is None else iso_utc(round(float(t)))[:16].replace("T", " ")
 
 
 def _num(v: float | None, unit: str = "") -> str:
@@ -130,41 +133,55 @@ def _num(v: float | None, unit: str = "") -> str:
     return f"{v:.3g}" + (f" {unit}" if unit else "")
 
 
-def _table(head: Sequence[str], rows: Sequence[Sequence[str]], *, right: set[int]) -> str:
-    out = ["<table><thead><tr>"]
-    out += [f'<th class="{"" if i in right else "l"}">{escape(h)}</th>'
-            for i, h in enumerate(head)]
-    out.append("</tr></thead><tbody>")
-    for row in rows:
-        out.append("<tr>" + "".join(f'<td class="{"" if i in right else "l"}">{escape(c)}</td>'
-                                    for i, c in enumerate(row)) + "</tr>")
+def _head(head: Sequence[str], classes: Sequence[str]) -> str:
+    return ("<thead><tr>" + "".join(f'<th class="{c}">{escape(h)}</th>'
+                                    for h, c in zip(head, classes, strict=True))
+            + "</tr></thead>")
+
+
+def _row(values: Sequence[str], classes: Sequence[str]) -> str:
+    return "<tr>" + "".join(f'<td class="{c}">{escape(v)}</td>'
+                            for v, c in zip(values, classes, strict=True)) + "</tr>"
+
+
+def _closed(r: Mapping[str, Any]) -> str:
+    if r.get("ended_s") is None:
+        return "–"
+    return f"{_time(r['ended_s'])}: {r.get('end_reason') or r['state']}"
+
+
+def _findings_table(d: Diagnostics) -> str:
+    """One row per finding, and under it the suggested action across the table (long
+    sentences in a narrow column make a tall, unreadable table)."""
+    head = ["finding", "kind", "subject", "state", "confidence", "start (UTC)",
+            "detected (UTC)", "closed (UTC), why"]
+    # l: left-aligned, t: a time kept on one line
+    classes = ["l", "l", "l", "l", "", "l t", "l t", "l"]
+    out = ["<table>", _head(head, classes), "<tbody>"]
+    for r in d.findings:
+        out.append(_row([f"#{r['finding_id']}", str(r["kind"]), str(r.get("subject") or "–"),
+                         str(r["state"]), _num(r.get("confidence")), _time(r.get("start_s")),
+                         _time(r.get("detected_s")), _closed(r)], classes))
+        out.append(f'<tr class="action"><td class="l" colspan="{len(head)}">suggested action: '
+                   f'{escape(str(r.get("action") or "–"))}</td></tr>')
     out.append("</tbody></table>")
     return "".join(out)
 
 
-def _findings_table(d: Diagnostics) -> str:
-    rows = [[f"#{r['finding_id']}", str(r["kind"]), str(r.get("subject") or "–"),
-             str(r["state"]), _num(r.get("confidence")), _time(r.get("start_s")),
-             _time(r.get("detected_s")), _time(r.get("ended_s")),
-             str(r.get("end_reason") or "–"), str(r.get("action") or "")]
-            for r in d.findings]
-    return _table(["finding", "kind", "subject", "state", "confidence", "start (UTC)",
-                   "detected (UTC)", "closed (UTC)", "why closed", "suggested action"], rows,
-                  right={4})
-
-
 def _evidence_table(d: Diagnostics) -> str:
+    classes = ["l", "l", "", "", "l t", "", ""]
     rows = []
     for r in d.findings:
         for e in r.get("evidence") or []:
             unit = str(e.get("unit") or "")
             stat_unit = "sd" if r["kind"] in _CUSUM_KINDS else unit
-            rows.append([f"#{r['finding_id']}", str(e.get("signal", "")),
-                         _num(e.get("shift"), unit), _num(e.get("shift_sd")),
-                         _time(e.get("since_s")), _num(e.get("statistic"), stat_unit),
-                         _num(e.get("threshold"), stat_unit)])
-    return _table(["finding", "signal", "shift", "shift [sd]", "since (UTC)", "statistic",
-                   "threshold"], rows, right={2, 3, 5, 6})
+            rows.append(_row([f"#{r['finding_id']}", str(e.get("signal", "")),
+                              _num(e.get("shift"), unit), _num(e.get("shift_sd")),
+                              _time(e.get("since_s")), _num(e.get("statistic"), stat_unit),
+                              _num(e.get("threshold"), stat_unit)], classes))
+    return ("<table>" + _head(["finding", "signal", "shift", "shift [sd]", "since (UTC)",
+                               "statistic", "threshold"], classes)
+            + f"<tbody>{''.join(rows)}</tbody></table>")
 
 
 def render_section(d: Diagnostics) -> str:
@@ -179,7 +196,7 @@ def render_section(d: Diagnostics) -> str:
              "went away. Confidence is how far past its threshold the evidence is (0.5 at "
              "it), not a probability. Shift: the change in the signal's unit and in units of "
              "its reference spread; statistic against the threshold it crossed.</p>")
-    listed = "".join(f"<li>#{fid}: {escape(why)}</li>" for fid, why in d.no_figure.items())
+    listed = "".join(f"<li>#{fid}: {escape(why)}</li>" for fid, why in sorted(d.no_figure.items()))
     rest = f'<p class="meta">Without a figure:</p><ul class="meta">{listed}</ul>' \
         if listed else ""
     return (f"{head}{intro}{_findings_table(d)}<h3>Evidence</h3>{_evidence_table(d)}"

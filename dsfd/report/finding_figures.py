@@ -23,7 +23,7 @@ from matplotlib.figure import Figure
 from dsfd.estimation.crosschecks import FlowCheckSettings, NightCheckSettings, nightly_offsets
 from dsfd.estimation.diagnostics import ResidualSettings, page_cusum, residual_blocks
 from dsfd.report.kpis import zone_name
-from dsfd.report.plotting import OUTSIDE, STATE_COLOURS, STATE_LABELS, WIDTH_IN, nothing
+from dsfd.report.plotting import OUTSIDE, STATE_COLOURS, STATE_LABELS, WIDTH_IN
 from dsfd.storage.evidence import (
     CROSSCHECK_WINDOW_S,
     NIGHT_WINDOW_S,
@@ -34,7 +34,8 @@ from dsfd.storage.evidence import (
     residual_series,
 )
 
-__all__ = ["FLOW_KINDS", "NIGHT_KINDS", "evidence_figure"]
+__all__ = ["FLOW_KINDS", "NIGHT_KINDS", "NoEvidence", "evidence_figure", "flow_figure",
+           "night_figure", "residual_figure"]
 
 FLOW_KINDS = ("damper_no_flow", "cavity_no_flow", "cavity_flow_when_closed")
 NIGHT_KINDS = ("pane_out_of_bounds", "pane_offset_shift")
@@ -42,6 +43,11 @@ _HOUR = 3600.0
 _MARKS = (("start_s", "start", "#ff7f0e", "--"), ("detected_s", "detected", "#d62728", "-"),
           ("ended_s", "closed", "#555555", ":"))
 _PATH_COLOURS = ("#1f77b4", "#2ca02c", "#9467bd", "#8c564b", "#e377c2", "#17becf", "#bcbd22")
+
+
+class NoEvidence(Exception):  # noqa: N818 (not an error: a finding with nothing to draw)
+    """The database holds none of the rows the finding's figure needs (the message says
+    which)."""
 
 
 class _Axes:
@@ -109,11 +115,8 @@ def residual_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h: 
                                      ax_t.hi_s, output) if output else (np.zeros(0), {}))
     err = errors.get(reading, np.zeros(0))
     if not np.isfinite(err).any():
-        for ax in (top, bottom):
-            nothing(ax, f"no stored readings and predictions of {reading or '?'} in the "
-                    "finding's window")
-            ax.set_axis_off()
-        return fig
+        raise NoEvidence(f"no stored readings and predictions of {reading or '?'} in the "
+                         "finding's window")
     b = residual_blocks(times, err, settings=st)
     mid = (b.blocks + 0.5) * st.block_s
     seen = (times >= ax_t.lo_s) & (times <= ax_t.hi_s)
@@ -155,10 +158,7 @@ def flow_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h: floa
     fig.suptitle(f"#{row['finding_id']} {row['kind']}{subject}: cavity air speed against "
                  "the commanded regime", fontsize=12, x=0.01, ha="left")
     if not s.time_s.size:
-        for ax in (speed, regime, opening):
-            nothing(ax, "no stored cavity speed readings in the window the check judged")
-            ax.set_axis_off()
-        return fig
+        raise NoEvidence("no stored cavity speed readings in the window the check judged")
     ax_t.lo_s = max(ax_t.lo_s, float(s.time_s[0]) - 10 * 60.0)  # no empty day on the left
     st = FlowCheckSettings()
     t = ax_t.local(s.time_s)
@@ -217,18 +217,15 @@ def night_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h: flo
                  "minus the outdoor air at night", fontsize=12, x=0.01, ha="left")
     site, room = (config or {}).get("site") or {}, (config or {}).get("room") or {}
     if site.get("latitude_deg") is None or site.get("longitude_deg") is None:
-        nothing(ax, "the site is not recorded with this log: night cannot be told")
-        ax.set_axis_off()
-        return fig
+        raise NoEvidence("the site is not recorded with this log (give --config): night "
+                         "cannot be told")
     s = night_series(conn, ax_t.lo_s, ax_t.hi_s, latitude_deg=float(site["latitude_deg"]),
                      longitude_deg=float(site["longitude_deg"]),
                      room_c=float(room.get("t_in_c", 22.0)), pane=pane)
     st = NightCheckSettings()
     o = nightly_offsets(s.time_s, s.pane_c, s.t_out_c, s.t_room_c, s.night, settings=st)
     if not o.nights:
-        nothing(ax, "no night with enough readings in the window the check judged")
-        ax.set_axis_off()
-        return fig
+        raise NoEvidence("no night with enough readings in the window the check judged")
     ax_t.lo_s = max(ax_t.lo_s, float(s.time_s[o.nights[0][0]]) - 6 * _HOUR)
     ax.plot(ax_t.local(s.time_s), o.offset_k, ".", ms=1.5, color="#aaaaaa",
             label="each night reading")
@@ -257,12 +254,18 @@ def night_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h: flo
 
 
 def evidence_figure(conn: sqlite3.Connection, row: Mapping[str, Any], *, offset_h: float,
-                    config: Mapping[str, Any] | None) -> Figure | None:
+                    config: Mapping[str, Any] | None) -> Figure | str:
     """The figure of one stored finding (a row of :func:`dsfd.storage.findings.
-    findings_between`), or None for a kind with no figure (``parameter_shift``)."""
+    findings_between`), or why there is none (a kind with no figure, e.g.
+    ``parameter_shift``, or no rows to draw it from)."""
     draw: dict[str, Callable[[], Figure]] = {
         "residual_shift": lambda: residual_figure(conn, row, offset_h),
         **{k: (lambda: flow_figure(conn, row, offset_h)) for k in FLOW_KINDS},
         **{k: (lambda: night_figure(conn, row, offset_h, config)) for k in NIGHT_KINDS}}
     f = draw.get(str(row["kind"]))
-    return None if f is None else f()
+    if f is None:
+        return f"no figure for a {row['kind']} finding"
+    try:
+        return f()
+    except NoEvidence as exc:
+        return f"no figure: {exc}"

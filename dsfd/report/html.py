@@ -29,6 +29,8 @@ table { border-collapse: collapse; margin: 0.4em 0 1em; font-size: 0.9em; }
 th, td { border: 1px solid #ccc; padding: 0.25em 0.55em; text-align: right; }
 th { background: #f0f0f0; }
 td.l, th.l { text-align: left; }
+td.t { white-space: nowrap; }
+tr.action td { white-space: normal; color: #444; background: #fafafa; }
 td:first-child { white-space: nowrap; }
 tr.total td { font-weight: bold; background: #fafafa; }
 figure { margin: 1em 0 2em; }
@@ -187,8 +189,10 @@ def render_html(report: Report) -> str:
                   for f in report.figures)
     figures = "".join(figure_html(f) for f in report.figures)
     diagnostics = "" if report.diagnostics is None else render_section(report.diagnostics)
-    diag_nav = "" if report.diagnostics is None else \
-        '<li><a href="#diagnostics">Diagnostics</a></li>'
+    found = None if report.diagnostics is None else len(report.diagnostics.findings)
+    diag_nav = "" if found is None else (
+        f'<li><a href="#diagnostics">Diagnostics ({found or "no"} finding'
+        f'{"" if found == 1 else "s"})</a></li>')
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8">
 <meta name="viewport" content="width=device-width, initial-scale=1">

@@ -49,6 +49,11 @@ def _lines(fig: Figure, offset_h: float) -> dict[str, tuple[np.ndarray, np.ndarr
     return out
 
 
+def _minute(t: float) -> str:
+    """A time as the section writes it: UTC to the minute."""
+    return iso_utc(round(t))[:16].replace("T", " ")
+
+
 def _png_size(section: str, fid: int) -> tuple[int, int]:
     from PIL import Image
 
@@ -79,7 +84,7 @@ def test_a_stored_residual_finding_is_listed_with_a_figure_of_its_step(residual_
     assert (row["kind"], row["subject"], row["state"]) == ("residual_shift", "residual:x3_c",
                                                            "open")
     for text in ("#1", "residual_shift", "residual:x3_c", f"{row['confidence']:.3g}",
-                 iso_utc(round(row["start_s"])), iso_utc(round(row["detected_s"])),
+                 _minute(row["start_s"]), _minute(row["detected_s"]),
                  "check the x3_c sensor", f"{row['evidence'][0]['shift']:.3g} K",
                  f"{row['evidence'][0]['statistic']:.3g} sd", "8 sd"):
         assert text in html, text
@@ -120,10 +125,10 @@ def test_a_night_offset_shift_is_drawn_from_the_nights_the_check_judged(tmp_path
     assert ref_t[-1] == row["start_s"] and ref_t[0] < step_night_s
     assert np.mean(medians[tm > step_night_s]) - ref[0] == pytest.approx(1.5, abs=0.4)
     assert abs(np.mean(medians[tm < step_night_s]) - ref[0]) < 0.3
-    # without the site, night cannot be told: a note, not a wrong figure
-    with sqlite3.connect(db) as conn:
-        bare = night_figure(conn, row, 9.0, None)
-    assert any("site is not recorded" in t.get_text() for ax in bare.axes for t in ax.texts)
+    # without the site, night cannot be told: no figure, and the section says why
+    bare = build_diagnostics(read_history(tmp_path), None, offset_h=9.0, dpi=40)
+    assert not bare.figures and "the site is not recorded" in bare.no_figure[1]
+    assert "#1: no figure: the site is not recorded" in render_section(bare)
 
 
 def test_without_findings_the_section_says_so_in_one_line(tmp_path):
@@ -146,26 +151,31 @@ def test_a_database_older_than_the_findings_says_so(tmp_path):
 
 
 def test_at_most_a_few_figures_open_findings_first_the_rest_listed(residual_state, tmp_path):
-    """Nine findings overlap the period (the residual one open, eight cavity findings that
-    ended), one ended before it: all nine listed, six drawn, the open one among them."""
+    """Nine findings overlap the period (the residual one open, eight earlier ones of the
+    same output that ended, and a cavity finding with no readings to draw), one ended before
+    it: all ten listed, six drawn with the open one among them, the rest say why not."""
     db = tmp_path / "timeseries.sqlite"
     with sqlite3.connect(residual_state / "timeseries.sqlite") as src, sqlite3.connect(db) as dst:
         src.backup(dst)
+        (evidence,) = dst.execute("SELECT evidence FROM findings").fetchone()
         end = T0 + DAYS * 86400.0
-        rows = [("cavity_no_flow", end - 3600.0 * (k + 2), end - 3600.0 * (k + 1))
-                for k in range(8)] + [("cavity_no_flow", T0 - 7200.0, T0 - 3600.0)]
+        rows = [("residual_shift", "residual:x3_c", end - 3600.0 * (k + 2),
+                 end - 3600.0 * (k + 1)) for k in range(8)]
+        rows += [("cavity_no_flow", "", end - 7200.0, end - 3600.0),
+                 ("residual_shift", "residual:x3_c", T0 - 7200.0, T0 - 3600.0)]
         dst.executemany(
             "INSERT INTO findings (run_id, kind, subject, confidence, start_s, detected_s, "
             "opened_s, last_seen_s, evidence, action, state, ended_s, end_reason) "
-            "VALUES (1, ?, '', 0.9, ?, ?, ?, ?, '[]', 'check', 'ended', ?, "
-            "'the evidence went away')", [(k, a, a, a, a, b) for k, a, b in rows])
+            "VALUES (1, ?, ?, 0.9, ?, ?, ?, ?, ?, 'check', 'ended', ?, "
+            "'the evidence went away')", [(k, s, a, a, a, a, evidence, b) for k, s, a, b in rows])
     history = read_history(tmp_path)
     with sqlite3.connect(db) as conn:
-        assert len(findings_between(conn, history.time_s[0], history.time_s[-1])) == 9
+        assert len(findings_between(conn, history.time_s[0], history.time_s[-1])) == 10
     d = build_diagnostics(history, None, offset_h=0.0, dpi=30)
     html = render_section(d)
-    assert len(d.findings) == 9 and len(d.figures) == MAX_FIGURES == 6
+    assert len(d.findings) == 10 and len(d.figures) == MAX_FIGURES == 6
     assert 1 in d.figures  # the open one
     assert html.count("<figure ") == 6 and html.count("not drawn: the report draws at most 6") \
         == 3
-    assert "#10" not in html  # ended before the period
+    assert "#10: no figure: no stored cavity speed readings" in html
+    assert "#11" not in html  # ended before the period
