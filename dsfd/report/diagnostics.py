@@ -54,6 +54,9 @@ def _none_line(history: History) -> str:
     if history.schema_version < 7:
         return (f"No findings: this database (schema {history.schema_version}) predates the "
                 "daemon's diagnostics (schema 7).")
+    if history.runs and all(r.mode.startswith("closed-loop simulation") for r in history.runs):
+        return ("No findings: a closed-loop simulation (dsfd simulate) does not run the "
+                "daemon's detectors; dsfd run does, also as a dry run.")
     return (f"No findings in this period. The cavity cross-check judges a damper set once it "
             f"has {FlowCheckSettings().min_samples} readings in the last day; the prediction-"
             f"error CUSUM needs {RESIDUAL_MIN_S / 86400:g} days of stored history, the night "
