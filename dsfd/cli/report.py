@@ -22,7 +22,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         "term, moves, methods, flagged samples, write failures, decision times, calibration, "
         "prediction errors against persistence) and figures (measured vs predicted states, "
         "commands with the weather, regimes by sky condition, parameter history, prediction "
-        "error over time, daily heat). Needs matplotlib: pip install 'dsfd[report]'.")
+        "error over time, daily heat), and the diagnostics: each finding of the daemon's "
+        "detectors in the period with a figure of its evidence. Needs matplotlib: "
+        "pip install 'dsfd[report]'.")
     add_state_arguments(p)
     p.add_argument("--out", required=True, type=Path, help="HTML file to write")
     p.add_argument("--json", type=Path, default=None, metavar="OUT",
@@ -71,5 +73,7 @@ def run(args: argparse.Namespace) -> int:
         return 1
     for note in report.notes:
         print(f"note: {note}")
-    print(f"wrote {args.out}: {len(history)} cycles, {len(report.figures)} figures")
+    found = len(report.diagnostics.findings) if report.diagnostics is not None else 0
+    print(f"wrote {args.out}: {len(history)} cycles, {len(report.figures)} figures, "
+          f"{found} finding{'s' if found != 1 else ''}")
     return 0

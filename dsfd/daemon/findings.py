@@ -6,7 +6,8 @@ After each stored cycle the runner calls :meth:`FindingsStage.after_cycle`; when
 last check and no check is running, a thread starts one, so the cycle never waits for it.
 A check, on its own SQLite connection:
 
-1. reads the rows of the last :data:`CROSSCHECK_WINDOW_S` (the cavity speed, the cavity,
+1. reads (:mod:`dsfd.storage.evidence`, which ``dsfd report`` draws the evidence from too)
+   the rows of the last :data:`CROSSCHECK_WINDOW_S` (the cavity speed, the cavity,
    room and outdoor air readings, and the command in force during each step) and, once
    :data:`RESIDUAL_MIN_S` of history is stored, the one-step prediction errors of the last
    :data:`RESIDUAL_WINDOW_S` (every :data:`RESIDUAL_EVERY_S`);
@@ -29,124 +30,63 @@ posterior sd, which the daemon does not store.
 from __future__ import annotations
 
 import contextvars
-import itertools
 import math
 import sqlite3
 import threading
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-
-from dsfd.config.panel import REGIME_OPENINGS
 from dsfd.daemon.logging_setup import get_logger
 from dsfd.estimation.crosschecks import cavity_flow_check, night_pane_check
 from dsfd.estimation.diagnostics import Finding, residual_change
 from dsfd.estimation.lifecycle import Changes, reconcile
-from dsfd.physics.solar.position import solar_position
 from dsfd.storage import findings as table
+from dsfd.storage.evidence import (
+    CROSSCHECK_WINDOW_S,
+    DAMPER_SHORT,
+    NIGHT_MIN_S,
+    NIGHT_WINDOW_S,
+    RESIDUAL_MIN_S,
+    RESIDUAL_WINDOW_S,
+    RESIDUALS,
+    flow_series,
+    night_series,
+    residual_series,
+)
 from dsfd.storage.schema import BUSY_TIMEOUT_MS
 
-__all__ = ["CHECK_EVERY_S", "CROSSCHECK_WINDOW_S", "DAMPER_SHORT", "FindingsStage",
-           "NightSite", "detect"]
+__all__ = ["CHECK_EVERY_S", "CROSSCHECK_WINDOW_S", "DAMPER_SHORT", "NIGHT_EVERY_S",
+           "NIGHT_MIN_S", "RESIDUAL_EVERY_S", "RESIDUAL_MIN_S", "FindingsStage", "NightSite",
+           "detect"]
 
 log = get_logger("dsfd.findings")
 
 #: How often the detectors run, on the daemon's clock [s].
 CHECK_EVERY_S = 300.0
-#: The cross-checks judge the last day: long enough that every path the controller uses in
-#: a day is judged, so a finding does not end at night only because no path was used.
-CROSSCHECK_WINDOW_S = 86400.0
-#: The residual detector needs five previous days at the same time of day
-#: (ResidualSettings.reference_days) and a day of spread: it runs once six days are stored,
-#: on the last seven.
-RESIDUAL_MIN_S = 6 * 86400.0
-RESIDUAL_WINDOW_S = 7 * 86400.0
-#: ... every hour: its blocks are 10 min and a step takes hours to find, and a check on
-#: a week of one-minute rows costs about 0.4 s of CPU (a dry run has no minute to spare).
+#: The residual CUSUM runs every hour (once RESIDUAL_MIN_S is stored): its blocks are 10 min
+#: and a step takes hours to find, and a check on a week of one-minute rows costs about
+#: 0.4 s of CPU (a dry run has no minute to spare).
 RESIDUAL_EVERY_S = 3600.0
-#: The night check compares each night with the 7-14 before it (NightCheckSettings): it runs
-#: once 8 days are stored, on the last 3 weeks, every 6 h (a night is judged once it ended).
-NIGHT_MIN_S = 8 * 86400.0
-NIGHT_WINDOW_S = 21 * 86400.0
+#: The night check runs every 6 h (once NIGHT_MIN_S is stored): a night is judged once it
+#: ended.
 NIGHT_EVERY_S = 6 * 3600.0
-#: Night: the sun this far below the horizon [deg] (civil twilight over), and below it
-#: :data:`NIGHT_AFTER_S` before too, so the day's heat has left the panes.
-NIGHT_SUN_DEG = -6.0
-NIGHT_AFTER_S = 2 * 3600.0
 _FLOW_KINDS = ("damper_no_flow", "cavity_no_flow", "cavity_flow_when_closed")
-#: Short damper names (the plant's, the findings'), by opening name.
-DAMPER_SHORT = {"exterior_bottom": "EB", "exterior_top": "ET", "interior_bottom": "IB",
-                "interior_top": "IT"}
-#: The outputs whose one-step prediction errors are watched: (reading, prediction, unit).
-_RESIDUALS = (*((f"x{i}_c", f"pred_x{i}_c", "K") for i in range(1, 6)),
-              ("v_cav_ms", "pred_v_cav_ms", "m/s"))
-_SIGNALS = ("v_cav_ms", "x5_c", "t_room_c", "t_out_c")
-
-
-def _rows(conn: sqlite3.Connection, since_s: float, until_s: float, signals: Sequence[str],
-          model_cols: Sequence[str]) -> tuple[list[tuple[int, int, float]],
-                                              dict[tuple[int, int], dict[str, float]]]:
-    """(run, cycle, time) of the stored cycles from ``since_s`` to ``until_s`` in order, and
-    per cycle the GOOD readings of ``signals`` and the ``model`` columns asked for."""
-    first = conn.execute("SELECT MIN(run_id) FROM decisions WHERE time_s >= ?",
-                         (since_s,)).fetchone()[0]
-    if first is None:
-        return [], {}
-    values: dict[tuple[int, int], dict[str, float]] = {}
-    marks = ", ".join("?" for _ in signals)
-    for run, cycle, signal, value in conn.execute(
-            f"SELECT run_id, cycle, signal, value FROM samples WHERE time_s >= ? AND "
-            f"time_s <= ? AND signal IN ({marks}) AND quality = 'good' AND value IS NOT NULL",
-            (since_s, until_s, *signals)):
-        values.setdefault((run, cycle), {})[signal] = float(value)
-    cycles = []
-    for run, cycle, time_s, *cols in conn.execute(
-            f"SELECT {', '.join(['run_id', 'cycle', 'time_s', *model_cols])} FROM model "
-            "WHERE run_id >= ? AND time_s >= ? AND time_s <= ? ORDER BY run_id, cycle",
-            (first, since_s, until_s)):
-        cycles.append((int(run), int(cycle), float(time_s)))
-        row = values.setdefault((run, cycle), {})
-        row.update({c: float(v) for c, v in zip(model_cols, cols, strict=True)
-                    if v is not None})
-    return cycles, values
 
 
 def _flow_finding(conn: sqlite3.Connection, now_s: float) -> Finding | None:
-    """The cavity cross-check on the last day: each reading against the command in force
-    during the step that ended at it (the previous cycle's applied position, same run)."""
-    cycles, values = _rows(conn, now_s - CROSSCHECK_WINDOW_S, now_s, _SIGNALS,
-                           ("applied_afr", "applied_or_pct"))
-    t, v, opened, drive = [], [], [], []
-    for (run0, c0, _), (run, cycle, time_s) in itertools.pairwise(cycles):
-        before, now = values.get((run0, c0), {}), values.get((run, cycle), {})
-        if run0 != run or c0 != cycle - 1 or "applied_afr" not in before \
-                or not {"v_cav_ms", "x5_c"} <= now.keys():
-            continue
-        afr, or_pct = int(before["applied_afr"]), before.get("applied_or_pct", 0.0)
-        t.append(time_s)
-        v.append(now["v_cav_ms"])
-        opened.append(frozenset(DAMPER_SHORT[n] for n in REGIME_OPENINGS.get(afr, ()))
-                      if or_pct > 0 else frozenset())
-        # the larger of the stack (cavity against outdoor air) and the room-side difference
-        drive.append(max(abs(now["x5_c"] - now.get("t_room_c", np.nan)),
-                         abs(now["x5_c"] - now.get("t_out_c", np.nan))))
-    if not t:
+    """The cavity cross-check on the last day (:func:`dsfd.storage.evidence.flow_series`)."""
+    s = flow_series(conn, now_s - CROSSCHECK_WINDOW_S, now_s)
+    if not s.time_s.size:
         return None
-    return cavity_flow_check(np.array(t), np.array(v), opened, np.array(drive))
+    return cavity_flow_check(s.time_s, s.v_cav_ms, s.opened, s.drive_k)
 
 
 def _residual_findings(conn: sqlite3.Connection, now_s: float) -> list[Finding]:
-    cycles, values = _rows(conn, now_s - RESIDUAL_WINDOW_S, now_s,
-                           [r for r, _, _ in _RESIDUALS],
-                           [p for _, p, _ in _RESIDUALS])
-    times = np.array([c[2] for c in cycles])
+    times, errors = residual_series(conn, now_s - RESIDUAL_WINDOW_S, now_s)
     out = []
-    for reading, pred, unit in _RESIDUALS:
-        res = np.array([values[c[:2]].get(reading, np.nan) - values[c[:2]].get(pred, np.nan)
-                        for c in cycles])
-        f = residual_change(times, res, signal=reading, unit=unit)
+    for reading, _, unit in RESIDUALS:
+        f = residual_change(times, errors[reading], signal=reading, unit=unit)
         if f is not None:
             out.append(f)
     return out
@@ -163,18 +103,11 @@ class NightSite:
 
 
 def _night_finding(conn: sqlite3.Connection, now_s: float, site: NightSite) -> Finding | None:
-    cycles, values = _rows(conn, now_s - NIGHT_WINDOW_S, now_s, ("x1_c", "t_out_c", "t_room_c"),
-                           ())
-    if not cycles:
+    s = night_series(conn, now_s - NIGHT_WINDOW_S, now_s, latitude_deg=site.latitude_deg,
+                     longitude_deg=site.longitude_deg, room_c=site.room_c)
+    if not s.time_s.size:
         return None
-    t = np.array([c[2] for c in cycles])
-    col = {n: np.array([values[c[:2]].get(n, np.nan) for c in cycles])
-           for n in ("x1_c", "t_out_c", "t_room_c")}
-    room = np.where(np.isfinite(col["t_room_c"]), col["t_room_c"], site.room_c)
-    lat, lon = site.latitude_deg, site.longitude_deg
-    night = ((solar_position(t, lat, lon).elevation_deg < NIGHT_SUN_DEG)
-             & (solar_position(t - NIGHT_AFTER_S, lat, lon).elevation_deg < 0.0))
-    return night_pane_check(t, col["x1_c"], col["t_out_c"], room, night, pane="x1_c")
+    return night_pane_check(s.time_s, s.pane_c, s.t_out_c, s.t_room_c, s.night, pane="x1_c")
 
 
 def detect(conn: sqlite3.Connection, now_s: float, *, residuals: bool = True,

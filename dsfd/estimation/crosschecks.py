@@ -21,7 +21,8 @@ import numpy as np
 
 from dsfd.estimation.diagnostics import Cusum, Evidence, Finding, cusum_confidence
 
-__all__ = ["FlowCheckSettings", "NightCheckSettings", "cavity_flow_check", "night_pane_check"]
+__all__ = ["FlowCheckSettings", "NightCheckSettings", "NightlyOffsets", "cavity_flow_check",
+           "night_pane_check", "nightly_offsets"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -215,6 +216,35 @@ def _night_cusum(medians: np.ndarray, st: NightCheckSettings) -> tuple[Cusum, np
     return Cusum(None, 0, medians.size, stat), z
 
 
+@dataclass(frozen=True, eq=False)
+class NightlyOffsets:
+    """The nights :func:`night_pane_check` judges: per night the indices of its readings,
+    the median of pane − outdoor air and the upper bound (the room's median excess over the
+    outdoor air + ``tolerance_k``) [K]; the lower bound is −``sky_depression_k``. ``offset_k``
+    is pane − outdoor air of every reading (NaN where it is not judged)."""
+
+    nights: list[np.ndarray]
+    medians: np.ndarray
+    upper_k: np.ndarray
+    offset_k: np.ndarray
+
+
+def nightly_offsets(times_s: np.ndarray, pane_c: np.ndarray, t_out_c: np.ndarray,
+                    t_room_c: np.ndarray, night: np.ndarray, *,
+                    settings: NightCheckSettings | None = None) -> NightlyOffsets:
+    """The nights with enough readings and their median offsets (the first step of
+    :func:`night_pane_check`; ``dsfd report`` draws them)."""
+    st = settings or NightCheckSettings()
+    t = np.asarray(times_s, float)
+    d = np.asarray(pane_c, float) - np.asarray(t_out_c, float)
+    span = np.asarray(t_room_c, float) - np.asarray(t_out_c, float)
+    ok = np.isfinite(d) & np.isfinite(span) & np.asarray(night, bool)
+    nights = [n for n in _nights(t, ok, st.split_s) if n.size >= st.min_samples]
+    return NightlyOffsets(nights, np.array([np.median(d[n]) for n in nights]),
+                          np.array([float(np.median(span[n])) + st.tolerance_k
+                                    for n in nights]), np.where(ok, d, np.nan))
+
+
 def night_pane_check(times_s: np.ndarray, pane_c: np.ndarray, t_out_c: np.ndarray,
                      t_room_c: np.ndarray, night: np.ndarray, *, pane: str = "x1_c",
                      settings: NightCheckSettings | None = None) -> Finding | None:
@@ -241,15 +271,11 @@ def night_pane_check(times_s: np.ndarray, pane_c: np.ndarray, t_out_c: np.ndarra
     """
     st = settings or NightCheckSettings()
     t = np.asarray(times_s, float)
-    d = np.asarray(pane_c, float) - np.asarray(t_out_c, float)
-    span = np.asarray(t_room_c, float) - np.asarray(t_out_c, float)
-    ok = np.isfinite(d) & np.isfinite(span) & np.asarray(night, bool)
-    nights = [n for n in _nights(t, ok, st.split_s) if n.size >= st.min_samples]
+    o = nightly_offsets(t, pane_c, t_out_c, t_room_c, night, settings=st)
+    nights, medians = o.nights, o.medians
     signal = f"crosscheck:{pane}-t_out_c"
     who = f"the {pane} thermocouple or the outdoor-air sensor (this check cannot tell which)"
-    medians = np.array([np.median(d[n]) for n in nights])
-    for n, m in zip(nights, medians, strict=True):
-        upper = float(np.median(span[n])) + st.tolerance_k
+    for n, m, upper in zip(nights, medians, o.upper_k, strict=True):
         if m < -st.sky_depression_k or m > upper:
             limit = -st.sky_depression_k if m < 0 else upper
             ev = Evidence(signal=signal, shift=float(m - limit), shift_sd=np.nan, unit="K",

@@ -21,8 +21,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Cusum", "Evidence", "Finding", "ParameterSettings", "ResidualSettings",
-           "cusum_confidence", "page_cusum", "parameter_change", "residual_change"]
+__all__ = ["Cusum", "Evidence", "Finding", "ParameterSettings", "ResidualBlocks",
+           "ResidualSettings", "block_means", "cusum_confidence", "page_cusum",
+           "parameter_change", "residual_blocks", "residual_change"]
 
 #: MAD → σ for normal data (Rousseeuw & Croux 1993).
 MAD_TO_SD = 1.4826
@@ -204,6 +205,33 @@ def block_means(times_s: np.ndarray, values: np.ndarray, *, block_s: float,
     return blocks[keep], sums[keep] / counts[keep]
 
 
+@dataclass(frozen=True, eq=False)
+class ResidualBlocks:
+    """What :func:`residual_change` runs its CUSUM on, per block with enough residuals.
+
+    ``blocks`` are block numbers (block start = ``blocks × block_s``), ``means`` the block
+    means, ``centre`` and ``scale`` each block's reference (NaN where the history is too
+    short) and ``z`` = (means − centre) / scale.
+    """
+
+    blocks: np.ndarray
+    means: np.ndarray
+    centre: np.ndarray
+    scale: np.ndarray
+    z: np.ndarray
+
+
+def residual_blocks(times_s: np.ndarray, residuals: np.ndarray, *,
+                    settings: ResidualSettings | None = None) -> ResidualBlocks:
+    """Block means of one output's prediction errors, standardised by their same-time
+    reference (the first steps of :func:`residual_change`; ``dsfd report`` draws them)."""
+    st = settings or ResidualSettings()
+    blocks, means = block_means(times_s, residuals, block_s=st.block_s,
+                                min_samples=st.min_block_samples)
+    centre, scale = _same_time_reference(blocks, means, st)
+    return ResidualBlocks(blocks, means, centre, scale, (means - centre) / scale)
+
+
 def residual_change(times_s: np.ndarray, residuals: np.ndarray, *, signal: str, unit: str,
                     settings: ResidualSettings | None = None) -> Finding | None:
     """The first change in one output's prediction errors, or None.
@@ -225,10 +253,8 @@ def residual_change(times_s: np.ndarray, residuals: np.ndarray, *, signal: str, 
         that block's end) and the block after its last zero (``start_s``: that block's start).
     """
     st = settings or ResidualSettings()
-    blocks, means = block_means(times_s, residuals, block_s=st.block_s,
-                                min_samples=st.min_block_samples)
-    centre, scale = _same_time_reference(blocks, means, st)
-    z = (means - centre) / scale
+    b = residual_blocks(times_s, residuals, settings=st)
+    blocks, means, centre, z = b.blocks, b.means, b.centre, b.z
     cs = page_cusum(z, k=st.k_sd, h=st.h_sd)
     if cs.alarm is None:
         return None

@@ -4,7 +4,8 @@ The report reads a state directory's database (:func:`dsfd.storage.history.read_
 read-only: the daemon may be running) and never sits on the control cycle's path.
 :func:`build_report` computes the key figures (:mod:`dsfd.report.kpis`) and draws the
 figures (:mod:`dsfd.report.figures`, matplotlib's Agg canvas); :func:`render_html` makes
-the page. matplotlib is the optional extra ``dsfd[report]``.
+the page; :mod:`dsfd.report.diagnostics` lists the daemon's findings of the period with a
+figure of each one's evidence. matplotlib is the optional extra ``dsfd[report]``.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from dsfd.storage.schema import iso_now
 
 if TYPE_CHECKING:
     from dsfd.config.panel import PanelConfig
+    from dsfd.report.diagnostics import Diagnostics
     from dsfd.report.figures import ReportFigure
 
 __all__ = ["INSTALL_HINT", "Report", "ReportUnavailableError", "build_report", "render_html",
@@ -46,6 +48,8 @@ class Report:
     version: str
     #: The newest ``dsfd commission`` page in the state directory, if any.
     commissioning: Path | None = None
+    #: The findings of the period and their figures (None: not built).
+    diagnostics: Diagnostics | None = None
 
 
 def _config(history: History, panel: PanelConfig | None) -> tuple[Mapping[str, Any] | None,
@@ -81,9 +85,11 @@ def build_report(history: History, *, panel: PanelConfig | None = None, dpi: int
     kpis = compute_kpis(history, config, errors)
     figures = draw_figures(history, kpis, errors, config, dpi=dpi)
     from dsfd.commission.record import latest_record
+    from dsfd.report.diagnostics import build_diagnostics
 
+    diagnostics = build_diagnostics(history, config, offset_h=kpis.utc_offset_h, dpi=dpi)
     return Report(history, config, kpis, figures, (*history.notes, *notes), iso_now(),
-                  __version__, latest_record(history.path.parent))
+                  __version__, latest_record(history.path.parent), diagnostics)
 
 
 def render_html(report: Report) -> str:

@@ -3,14 +3,15 @@ no network — it opens from a USB stick and prints."""
 
 from __future__ import annotations
 
-import base64
 import math
 from collections.abc import Iterable, Sequence
 from html import escape
 from typing import TYPE_CHECKING
 
 from dsfd.measured import iso_utc
+from dsfd.report.diagnostics import render_section
 from dsfd.report.kpis import HEAT_TERMS, STATES, DayKpis, zone_name
+from dsfd.report.plotting import figure_html
 
 if TYPE_CHECKING:
     from dsfd.report import Report
@@ -28,6 +29,8 @@ table { border-collapse: collapse; margin: 0.4em 0 1em; font-size: 0.9em; }
 th, td { border: 1px solid #ccc; padding: 0.25em 0.55em; text-align: right; }
 th { background: #f0f0f0; }
 td.l, th.l { text-align: left; }
+td.t { white-space: nowrap; }
+tr.action td { white-space: normal; color: #444; background: #fafafa; }
 td:first-child { white-space: nowrap; }
 tr.total td { font-weight: bold; background: #fafafa; }
 figure { margin: 1em 0 2em; }
@@ -184,11 +187,12 @@ def render_html(report: Report) -> str:
     notes = "".join(f'<p class="note">Note: {escape(n)}</p>' for n in report.notes)
     nav = "".join(f'<li><a href="#{f.fig_id}">{escape(f.title)}</a></li>'
                   for f in report.figures)
-    figures = "".join(
-        f'<figure id="{f.fig_id}"><h3>{escape(f.title)}</h3>'
-        f'<img alt="{escape(f.title)}" src="data:image/png;base64,'
-        f'{base64.b64encode(f.png).decode("ascii")}">'
-        f"<figcaption>{escape(f.caption)}</figcaption></figure>" for f in report.figures)
+    figures = "".join(figure_html(f) for f in report.figures)
+    diagnostics = "" if report.diagnostics is None else render_section(report.diagnostics)
+    found = None if report.diagnostics is None else len(report.diagnostics.findings)
+    diag_nav = "" if found is None else (
+        f'<li><a href="#diagnostics">Diagnostics ({found or "no"} finding'
+        f'{"" if found == 1 else "s"})</a></li>')
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8">
 <meta name="viewport" content="width=device-width, initial-scale=1">
@@ -200,7 +204,7 @@ figures in local standard time {zone_name(k.utc_offset_h)}). State directory
 <code>{escape(str(h.path.parent))}</code>; report made {escape(report.made_utc)} by dsfd
 {escape(report.version)}.</p>
 {notes}{_commissioning(report)}
-<nav><ul><li><a href="#kpis">Key figures</a></li>{nav}</ul></nav>
+<nav><ul><li><a href="#kpis">Key figures</a></li>{diag_nav}{nav}</ul></nav>
 <h2 id="kpis">Key figures</h2>
 <h3>Operation per day</h3>{_operation(report)}
 <h3>Heat into the room [kWh]</h3>
@@ -216,6 +220,7 @@ prediction with the applied command held on the forecast weather, against the re
 {_errors(report)}
 <h3>Flagged samples by signal and quality</h3>{_flagged(report)}
 <h3>Calibration</h3>{_bounds(report)}
+{diagnostics}
 <h2>Figures</h2>
 {figures}
 <h2>Runs</h2>{_runs(report)}

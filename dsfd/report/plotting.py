@@ -4,9 +4,11 @@ Agg canvas: no display, no pyplot state)."""
 
 from __future__ import annotations
 
+import base64
 import io
 from collections.abc import Mapping
 from dataclasses import dataclass
+from html import escape
 from typing import Any
 
 import numpy as np
@@ -21,7 +23,7 @@ from dsfd.storage.history import History
 
 __all__ = ["HEAT_COLOURS", "METHOD_COLOURS", "OUTSIDE", "PARAM_UNITS", "PLAIN", "PLAIN_MINOR",
            "STATE_COLOURS", "STATE_LABELS", "WIDTH_IN", "Context", "ReportFigure", "bin_width_s",
-           "binned", "broken", "nothing", "png", "regime_colour", "time_axis"]
+           "binned", "broken", "figure_html", "nothing", "png", "regime_colour", "time_axis"]
 
 WIDTH_IN = 11.0
 STATE_LABELS = {"x1": "x1 exterior pane", "x2": "x2 DGU outer pane", "x3": "x3 DGU inner pane",
@@ -50,6 +52,14 @@ class ReportFigure:
     title: str
     caption: str
     png: bytes
+
+
+def figure_html(f: ReportFigure) -> str:
+    """The figure as an HTML ``<figure>`` with its PNG inline."""
+    return (f'<figure id="{f.fig_id}"><h3>{escape(f.title)}</h3>'
+            f'<img alt="{escape(f.title)}" src="data:image/png;base64,'
+            f'{base64.b64encode(f.png).decode("ascii")}">'
+            f"<figcaption>{escape(f.caption)}</figcaption></figure>")
 
 
 @dataclass(frozen=True)

@@ -5,7 +5,8 @@ Written in two places: the daemon's findings thread (:mod:`dsfd.daemon.findings`
 :func:`dsfd.estimation.lifecycle.reconcile`'s changes with :func:`apply`, and the loop
 applies an operator's ``ack`` command with :func:`acknowledge`. Each is one short
 transaction, and both only change a row that is still open, so neither can undo the other.
-Read by ``dsfd status``, the MQTT publisher and the metrics (:func:`open_findings`).
+Read by ``dsfd status``, the MQTT publisher and the metrics (:func:`open_findings`), and
+``dsfd report`` (:func:`findings_between`).
 """
 
 from __future__ import annotations
@@ -26,8 +27,8 @@ from dsfd.estimation.lifecycle import (
     subject_of,
 )
 
-__all__ = ["COLUMNS", "acknowledge", "apply", "evidence_json", "load", "open_by_kind",
-           "open_findings"]
+__all__ = ["COLUMNS", "acknowledge", "apply", "evidence_json", "findings_between", "load",
+           "open_by_kind", "open_findings"]
 
 #: Columns a reader gets from :func:`open_findings`.
 COLUMNS = ("finding_id", "run_id", "kind", "subject", "confidence", "start_s", "detected_s",
@@ -107,12 +108,12 @@ def acknowledge(conn: sqlite3.Connection, finding_id: int, *, command_id: int, n
                        "start) opens a new one")
 
 
-def open_findings(conn: sqlite3.Connection) -> list[dict[str, Any]]:
-    """The open findings, oldest first, each a mapping of :data:`COLUMNS` (``evidence``
-    parsed)."""
+def _read(conn: sqlite3.Connection, where: str, args: Sequence[Any]) -> list[dict[str, Any]]:
+    """Rows of :data:`COLUMNS` by id, ``evidence`` parsed; none from a database older than
+    schema 7."""
     try:
-        rows = conn.execute(f"SELECT {', '.join(COLUMNS)} FROM findings WHERE state = ? "
-                            "ORDER BY finding_id", (OPEN,)).fetchall()
+        rows = conn.execute(f"SELECT {', '.join(COLUMNS)} FROM findings WHERE {where} "
+                            "ORDER BY finding_id", tuple(args)).fetchall()
     except sqlite3.OperationalError:  # a database older than schema 7: no findings yet
         return []
     out = []
@@ -125,6 +126,20 @@ def open_findings(conn: sqlite3.Connection) -> list[dict[str, Any]]:
         out.append(d)
     return out
 
+
+def open_findings(conn: sqlite3.Connection) -> list[dict[str, Any]]:
+    """The open findings, oldest first, each a mapping of :data:`COLUMNS` (``evidence``
+    parsed)."""
+    return _read(conn, "state = ?", (OPEN,))
+
+
+def findings_between(conn: sqlite3.Connection, since_s: float, until_s: float
+                     ) -> list[dict[str, Any]]:
+    """Every finding (open, acknowledged, ended) whose evidence overlaps ``since_s`` ..
+    ``until_s`` [s]: it started by ``until_s`` and was still open at ``since_s`` (for
+    ``dsfd report``); as :func:`open_findings`."""
+    return _read(conn, "start_s <= ? AND (ended_s IS NULL OR ended_s >= ?)",
+                 (until_s, since_s))
 
 
 def open_by_kind(conn: sqlite3.Connection) -> dict[str, int]:

@@ -67,6 +67,9 @@ def test_a_closed_loop_writes_the_same_report(tmp_path, capsys):
     assert f"wrote {html}" in out
     text = html.read_text()
     assert text.count("<img ") == len(FIGURES) and "closed-loop simulation" in text
+    # a closed loop runs no detectors: its report does not pretend they found nothing
+    assert "a closed-loop simulation (dsfd simulate) does not run the daemon&#x27;s " \
+        "detectors" in text
     summary = json.loads(js.read_text())
     cycles = summary["cycles"]
     assert cycles == 30 and "rule " + str(cycles) in text

@@ -3,12 +3,14 @@ what the daemon stores, and the cavity cross-check on those rows names it
 (docs/model.md#diagnostics-crosschecks); the same run without the fault gives no finding.
 
 The daemon runs that check itself (docs/model.md#findings): its ``findings`` table and
-``dsfd status`` name the stuck damper, and the clean run has no finding."""
+``dsfd status`` name the stuck damper, and the clean run has no finding; ``dsfd report``
+lists it with a figure of its evidence."""
 
 from __future__ import annotations
 
 import itertools
 import json
+import sqlite3
 import subprocess
 from pathlib import Path
 
@@ -130,3 +132,56 @@ def test_the_clean_run_stores_no_finding(runs):
     db = runs["clean"]["db"]
     assert query(db, "SELECT COUNT(*) FROM findings") == [(0,)]
     assert _status(db)["findings"] == []
+
+
+def test_dsfd_report_shows_the_stuck_damper_finding_with_a_figure_of_its_evidence(runs,
+                                                                                    tmp_path):
+    """``dsfd report`` of the stuck run: its Diagnostics section lists the open finding
+    with its evidence and draws it (docs/operating.md#seeing-what-the-controller-did)."""
+    import base64
+    import io
+    import re
+
+    from PIL import Image
+
+    from dsfd.report.finding_figures import flow_figure
+    from dsfd.storage.findings import open_findings
+
+    db = runs["stuck"]["db"]
+    html = tmp_path / "report.html"
+    done = subprocess.run(dsfd_command("report", "--state-dir", str(db.parent), "--out",
+                                       str(html), "--dpi", "50"), cwd=ROOT,
+                          capture_output=True, text=True, timeout=300, check=False)
+    assert done.returncode == 0, done.stderr
+    page = html.read_text()
+    section = page[page.index('<h2 id="diagnostics">'):page.index("<h2>Figures</h2>")]
+    conn = sqlite3.connect(db)
+    try:
+        stored = conn.execute("SELECT COUNT(*) FROM findings").fetchone()[0]
+        assert done.stdout.rstrip().endswith(
+            f"7 figures, {stored} finding{'s' if stored != 1 else ''}")
+        (row,) = open_findings(conn)
+        fid = row["finding_id"]
+        for text in (f"#{fid}", "damper_no_flow", ">IT<", ">open<", "check damper IT",
+                     "crosscheck:v_cav_ms[IB+IT]", "0.02 m/s"):
+            assert text in section, text
+        m = re.search(rf'<figure id="finding-{fid}">.*?base64,([^"]+)"', section, re.S)
+        assert m is not None
+        assert Image.open(io.BytesIO(base64.b64decode(m.group(1)))).size[0] > 300
+        # What it draws: after the onset, the readings of every path through the stuck
+        # damper lie below the stored threshold the open path had to pass (the air does not
+        # move), and the commanded opening of those cycles was not zero.
+        fig = flow_figure(conn, row, 9.0)
+    finally:
+        conn.close()
+    speed = fig.axes[0]
+    onset = np.datetime64(int((runs["stuck"]["time_s"][0] + 9 * 3600) * 1e3), "ms")
+    paths = {str(line.get_label()): line for line in speed.get_lines()}
+    through_it = [k for k in paths if k.endswith(" open") and "IT" in k]
+    assert through_it
+    for k in through_it:
+        x, y = np.asarray(paths[k].get_xdata()), np.asarray(paths[k].get_ydata(), float)
+        assert np.median(y[x >= onset]) < 0.02, k
+    threshold = next(v for k, v in paths.items() if k.startswith("threshold"))
+    assert threshold.get_ydata()[0] == pytest.approx(row["evidence"][0]["threshold"])
+    assert np.asarray(fig.axes[2].get_lines()[0].get_ydata(), float).max() > 0

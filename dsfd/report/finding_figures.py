@@ -1,0 +1,271 @@
+"""One figure per stored finding: the evidence its detector judged, drawn from the same rows.
+
+The series come from :mod:`dsfd.storage.evidence` (what the daemon's check feeds the
+detectors) and the detectors' own first steps (:func:`~dsfd.estimation.diagnostics.
+residual_blocks`, :func:`~dsfd.estimation.crosschecks.nightly_offsets`), so a figure shows
+what was judged, not a look-alike. The window is the finding's: for a residual shift a day
+before its start to the last check that saw it; for the cross-checks the window the last
+check that saw it judged. Times on the axes are local standard time, like every figure of
+the report; marked: the finding's start and detection (and its end), as stored.
+"""
+
+from __future__ import annotations
+
+import sqlite3
+from collections.abc import Callable, Mapping
+from typing import Any
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.dates import AutoDateLocator, ConciseDateFormatter
+from matplotlib.figure import Figure
+
+from dsfd.estimation.crosschecks import FlowCheckSettings, NightCheckSettings, nightly_offsets
+from dsfd.estimation.diagnostics import ResidualSettings, page_cusum, residual_blocks
+from dsfd.report.kpis import zone_name
+from dsfd.report.plotting import OUTSIDE, STATE_COLOURS, STATE_LABELS, WIDTH_IN
+from dsfd.storage.evidence import (
+    CROSSCHECK_WINDOW_S,
+    NIGHT_WINDOW_S,
+    RESIDUAL_WINDOW_S,
+    RESIDUALS,
+    flow_series,
+    night_series,
+    residual_series,
+)
+
+__all__ = ["FLOW_KINDS", "NIGHT_KINDS", "NoEvidence", "evidence_figure", "flow_figure",
+           "night_figure", "residual_figure"]
+
+FLOW_KINDS = ("damper_no_flow", "cavity_no_flow", "cavity_flow_when_closed")
+NIGHT_KINDS = ("pane_out_of_bounds", "pane_offset_shift")
+_HOUR = 3600.0
+_MARKS = (("start_s", "start", "#ff7f0e", "--"), ("detected_s", "detected", "#d62728", "-"),
+          ("ended_s", "closed", "#555555", ":"))
+_PATH_COLOURS = ("#1f77b4", "#2ca02c", "#9467bd", "#8c564b", "#e377c2", "#17becf", "#bcbd22")
+
+
+class NoEvidence(Exception):  # noqa: N818 (not an error: a finding with nothing to draw)
+    """The database holds none of the rows the finding's figure needs (the message says
+    which)."""
+
+
+class _Axes:
+    """Local standard time on the axes of one finding's figure."""
+
+    def __init__(self, offset_h: float, lo_s: float, hi_s: float) -> None:
+        self.offset_h, self.lo_s, self.hi_s = offset_h, lo_s, hi_s
+
+    def local(self, time_s: np.ndarray | float) -> np.ndarray:
+        t = np.asarray(time_s, float) + self.offset_h * 3600.0
+        return (t * 1e3).astype("int64").astype("datetime64[ms]")
+
+    def setup(self, ax: Axes, *, label: bool) -> None:
+        locator = AutoDateLocator(minticks=3, maxticks=8)
+        ax.xaxis.set_major_locator(locator)
+        ax.xaxis.set_major_formatter(ConciseDateFormatter(locator))
+        # a little room on the right, so a detection at the window's end shows
+        pad = 0.02 * (self.hi_s - self.lo_s)
+        ax.set_xlim(self.local(self.lo_s), self.local(self.hi_s + pad))
+        ax.grid(True, alpha=0.3)
+        if label:
+            ax.set_xlabel(f"local standard time ({zone_name(self.offset_h)})")
+
+    def marks(self, ax: Axes, row: Mapping[str, Any], *, legend: bool) -> None:
+        """The finding's stored start, detection and end (when inside the window)."""
+        for key, name, colour, style in _MARKS:
+            t = row.get(key)
+            if t is None or not self.lo_s <= float(t) <= self.hi_s:
+                continue
+            what = f"{name} ({row['state']})" if key == "ended_s" else name
+            ax.axvline(self.local(float(t)), color=colour, ls=style, lw=1.3,
+                       label=what if legend else None)
+
+
+def _end_s(row: Mapping[str, Any]) -> float:
+    """The last time the finding's evidence was judged: its last check, or its end."""
+    ts = [float(row[k]) for k in ("detected_s", "last_seen_s", "ended_s")
+          if row.get(k) is not None]
+    return max(ts)
+
+
+def _signal(row: Mapping[str, Any]) -> str:
+    ev = row.get("evidence") or [{}]
+    name = str(row.get("subject") or ev[0].get("signal") or "")
+    return name.split(":", 1)[-1]
+
+
+def residual_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h: float
+                    ) -> Figure:
+    """Block means of the one-step prediction error with the detector's same-time reference,
+    and the CUSUM statistic against its threshold."""
+    reading = _signal(row)
+    unit = next((u for r, _, u in RESIDUALS if r == reading), "")
+    st = ResidualSettings()
+    end = _end_s(row)
+    ax_t = _Axes(offset_h, float(row["start_s"]) - 86400.0, end + _HOUR)
+    fig = Figure(figsize=(WIDTH_IN, 5.0), layout="constrained")
+    top, bottom = fig.subplots(2, 1, sharex=True, height_ratios=[1.6, 1.0])
+    label = STATE_LABELS.get(reading[:2], "cavity air speed" if reading == "v_cav_ms"
+                             else reading)
+    fig.suptitle(f"#{row['finding_id']} residual_shift: one-step prediction error of "
+                 f"{label}", fontsize=12, x=0.01, ha="left")
+    output = [o for o in RESIDUALS if o[0] == reading]
+    times, errors = (residual_series(conn, float(row["detected_s"]) - RESIDUAL_WINDOW_S,
+                                     ax_t.hi_s, output) if output else (np.zeros(0), {}))
+    err = errors.get(reading, np.zeros(0))
+    if not np.isfinite(err).any():
+        raise NoEvidence(f"no stored readings and predictions of {reading or '?'} in the "
+                         "finding's window")
+    b = residual_blocks(times, err, settings=st)
+    mid = (b.blocks + 0.5) * st.block_s
+    seen = (times >= ax_t.lo_s) & (times <= ax_t.hi_s)
+    colour = STATE_COLOURS.get(reading[:2], "#8c564b")
+    top.plot(ax_t.local(times[seen]), err[seen], color="#bbbbbb", lw=0.6,
+             label="each cycle: reading − prediction")
+    top.fill_between(ax_t.local(mid), b.centre - b.scale, b.centre + b.scale, color="#dddddd",
+                     lw=0, step="mid", label="reference ± its long-run spread")
+    top.plot(ax_t.local(mid), b.centre, color="black", ls="--", lw=1.1,
+             label="reference: median at this time of day, 5 previous days")
+    top.plot(ax_t.local(mid), b.means, "o-", ms=2.5, lw=1.0, color=colour,
+             label=f"{st.block_s / 60:g}-min block means (the detector's input)")
+    top.set_ylabel(f"measured − predicted\n[{unit}]")
+    ax_t.marks(top, row, legend=True)
+    top.legend(**OUTSIDE)
+    ax_t.setup(top, label=False)
+    cs = page_cusum(b.z, k=st.k_sd, h=st.h_sd)
+    n = cs.statistic.size
+    bottom.plot(ax_t.local(mid[:n]), cs.statistic, color=colour, lw=1.3,
+                label=f"CUSUM (k = {st.k_sd:g}), recomputed from the stored rows")
+    bottom.axhline(st.h_sd, color="black", ls="--", lw=1.0, label=f"threshold h = {st.h_sd:g}")
+    bottom.set_ylim(bottom=0)
+    bottom.set_ylabel("CUSUM statistic\n[long-run sd]")
+    ax_t.marks(bottom, row, legend=False)
+    bottom.legend(**OUTSIDE)
+    ax_t.setup(bottom, label=True)
+    return fig
+
+
+def flow_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h: float) -> Figure:
+    """The measured cavity speed, coloured by the dampers the command in force opened, above
+    the commanded regime and damper opening: the last day the latest check judged."""
+    end = _end_s(row)
+    ax_t = _Axes(offset_h, end - CROSSCHECK_WINDOW_S, end)
+    s = flow_series(conn, ax_t.lo_s, ax_t.hi_s)
+    fig = Figure(figsize=(WIDTH_IN, 5.2), layout="constrained")
+    speed, regime, opening = fig.subplots(3, 1, sharex=True, height_ratios=[1.7, 0.8, 0.6])
+    subject = f" {row['subject']}" if row.get("subject") else ""
+    fig.suptitle(f"#{row['finding_id']} {row['kind']}{subject}: cavity air speed against "
+                 "the commanded regime", fontsize=12, x=0.01, ha="left")
+    if not s.time_s.size:
+        raise NoEvidence("no stored cavity speed readings in the window the check judged")
+    ax_t.lo_s = max(ax_t.lo_s, float(s.time_s[0]) - 10 * 60.0)  # no empty day on the left
+    st = FlowCheckSettings()
+    t = ax_t.local(s.time_s)
+    paths = sorted(set(s.opened), key=lambda p: (len(p) > 0, sorted(p)))
+    hollow = False
+    for i, p in enumerate(paths):
+        sel = np.array([o == p for o in s.opened])
+        name = "+".join(sorted(p)) if p else "all shut"
+        colour = "#7f7f7f" if not p else _PATH_COLOURS[i % len(_PATH_COLOURS)]
+        judged = sel if not p else sel & (s.drive_k >= st.min_drive_k)
+        speed.plot(t[judged], s.v_cav_ms[judged], "o", ms=3, color=colour,
+                   label=f"{name} open" if p else name)
+        if (sel & ~judged).any():
+            speed.plot(t[sel & ~judged], s.v_cav_ms[sel & ~judged], "o", ms=3, mfc="none",
+                       color=colour, alpha=0.6)
+            hollow = True
+    thresholds = sorted({round(float(e["threshold"]), 6) for e in row.get("evidence") or []
+                         if e.get("threshold") is not None})
+    for thr in thresholds:
+        speed.axhline(thr, color="black", ls="--", lw=1.0,
+                      label=f"threshold {thr:.3g} m/s" + (
+                          " (closed-cavity limit)" if row["kind"] == "cavity_flow_when_closed"
+                          else " (an open path must move more)"))
+    if hollow:
+        speed.plot([], [], "o", ms=3, mfc="none", color="#555555",
+                   label=f"hollow: driving difference < {st.min_drive_k:g} K (not judged)")
+    speed.set_ylabel("cavity air speed\n[m/s]")
+    speed.set_ylim(bottom=0)
+    ax_t.marks(speed, row, legend=True)
+    speed.legend(**OUTSIDE)
+    ax_t.setup(speed, label=False)
+    regime.step(t, s.afr, where="pre", color="#1f77b4", lw=1.3)
+    regime.set_ylim(0.5, 10.5)
+    regime.set_yticks([1, 4, 7, 10])
+    regime.set_ylabel("regime\n(1-10)")
+    ax_t.marks(regime, row, legend=False)
+    ax_t.setup(regime, label=False)
+    opening.step(t, s.or_pct, where="pre", color="#2ca02c", lw=1.3)
+    opening.set_ylim(-5, 105)
+    opening.set_ylabel("opening\n[%]")
+    ax_t.marks(opening, row, legend=False)
+    ax_t.setup(opening, label=True)
+    return fig
+
+
+def night_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h: float,
+                 config: Mapping[str, Any] | None) -> Figure:
+    """A pane minus the outdoor air at night: each reading, the nightly medians the check
+    judges and its bounds, over the weeks the latest check judged."""
+    end = _end_s(row)
+    ax_t = _Axes(offset_h, end - NIGHT_WINDOW_S, end)
+    fig = Figure(figsize=(WIDTH_IN, 4.2), layout="constrained")
+    ax = fig.subplots()
+    pane = _signal(row).split("-", 1)[0] or "x1_c"
+    fig.suptitle(f"#{row['finding_id']} {row['kind']}: {STATE_LABELS.get(pane[:2], pane)} "
+                 "minus the outdoor air at night", fontsize=12, x=0.01, ha="left")
+    site, room = (config or {}).get("site") or {}, (config or {}).get("room") or {}
+    if site.get("latitude_deg") is None or site.get("longitude_deg") is None:
+        raise NoEvidence("the site is not recorded with this log (give --config): night "
+                         "cannot be told")
+    s = night_series(conn, ax_t.lo_s, ax_t.hi_s, latitude_deg=float(site["latitude_deg"]),
+                     longitude_deg=float(site["longitude_deg"]),
+                     room_c=float(room.get("t_in_c", 22.0)), pane=pane)
+    st = NightCheckSettings()
+    o = nightly_offsets(s.time_s, s.pane_c, s.t_out_c, s.t_room_c, s.night, settings=st)
+    if not o.nights:
+        raise NoEvidence("no night with enough readings in the window the check judged")
+    ax_t.lo_s = max(ax_t.lo_s, float(s.time_s[o.nights[0][0]]) - 6 * _HOUR)
+    ax.plot(ax_t.local(s.time_s), o.offset_k, ".", ms=1.5, color="#aaaaaa",
+            label="each night reading")
+    mid = np.array([float(np.median(s.time_s[n])) for n in o.nights])
+    ax.plot(ax_t.local(mid), o.medians, "o-", ms=4, color=STATE_COLOURS.get(pane[:2], "k"),
+            label="nightly median (the check's input)")
+    start = float(row["start_s"])
+    before = o.medians[mid < start][-st.reference_nights:]
+    if row["kind"] == "pane_out_of_bounds":
+        # the bounds a pane between the sky and the room keeps to
+        ax.plot(ax_t.local(mid), o.upper_k, "_", ms=12, mew=2, color="#d62728",
+                label=f"upper bound: room − outdoor air + {st.tolerance_k:g} K")
+        ax.axhline(-st.sky_depression_k, color="#1f77b4", ls="--", lw=1.0,
+                   label=f"lower bound: −{st.sky_depression_k:g} K (clear sky)")
+    elif before.size:
+        # an offset shift is judged against the nights before it, well inside the bounds
+        level = float(np.median(before))
+        ax.plot(ax_t.local(np.array([mid[mid < start][-before.size], start])), [level, level],
+                color="black", ls="--", lw=1.1,
+                label="reference: median of the nights before the start")
+    ax.set_ylabel(f"{pane[:2]} − outdoor air\n[K]")
+    ax_t.marks(ax, row, legend=True)
+    ax.legend(**OUTSIDE)
+    ax_t.setup(ax, label=True)
+    return fig
+
+
+def evidence_figure(conn: sqlite3.Connection, row: Mapping[str, Any], *, offset_h: float,
+                    config: Mapping[str, Any] | None) -> Figure | str:
+    """The figure of one stored finding (a row of :func:`dsfd.storage.findings.
+    findings_between`), or why there is none (a kind with no figure, e.g.
+    ``parameter_shift``, or no rows to draw it from)."""
+    draw: dict[str, Callable[[], Figure]] = {
+        "residual_shift": lambda: residual_figure(conn, row, offset_h),
+        **{k: (lambda: flow_figure(conn, row, offset_h)) for k in FLOW_KINDS},
+        **{k: (lambda: night_figure(conn, row, offset_h, config)) for k in NIGHT_KINDS}}
+    f = draw.get(str(row["kind"]))
+    if f is None:
+        return f"no figure for a {row['kind']} finding"
+    try:
+        return f()
+    except NoEvidence as exc:
+        return f"no figure: {exc}"
