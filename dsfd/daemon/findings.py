@@ -19,11 +19,16 @@ A check, on its own SQLite connection:
 Every :data:`NIGHT_EVERY_S`, once :data:`NIGHT_MIN_S` of history is stored, it also runs
 :func:`~dsfd.estimation.crosschecks.night_pane_check` on the exterior pane x1 over the last
 :data:`NIGHT_WINDOW_S` (readings with the sun 6° below the horizon that had it below the
-horizon two hours before). A detector that did not run in a check ends none of its
-findings.
+horizon two hours before).
 
-The parameter-change detector is not run by the daemon: it needs the calibration's
-posterior sd, which the daemon does not store.
+Every :data:`PARAMETER_EVERY_S` it runs :func:`~dsfd.estimation.diagnostics.parameter_change`
+per θ parameter on its on-line estimates of the last :data:`PARAMETER_WINDOW_S` of complete
+UTC days, each with the posterior sd stored with it (schema 8; in the fitting coordinates,
+log θ for the positive parameters), since the calibration last started from its priors:
+one value a day, the precision-weighted mean of the day's estimates with the sd of one of
+them (:func:`~dsfd.estimation.parameter_watch.daily_estimates`), once
+:data:`PARAMETER_MIN_DAYS` days make a series. A detector that did not run in a check ends
+none of its findings.
 """
 
 from __future__ import annotations
@@ -39,17 +44,19 @@ from pathlib import Path
 
 import numpy as np
 
-from dsfd.config.panel import REGIME_OPENINGS
+from dsfd.config.panel import PARAMETER_NAMES, REGIME_OPENINGS
 from dsfd.daemon.logging_setup import get_logger
 from dsfd.estimation.crosschecks import cavity_flow_check, night_pane_check
-from dsfd.estimation.diagnostics import Finding, residual_change
+from dsfd.estimation.diagnostics import Finding, parameter_change, residual_change
 from dsfd.estimation.lifecycle import Changes, reconcile
+from dsfd.estimation.parameter_watch import LOG_UNIT, daily_estimates
+from dsfd.estimation.params import LINEAR_NAMES
 from dsfd.physics.solar.position import solar_position
 from dsfd.storage import findings as table
-from dsfd.storage.schema import BUSY_TIMEOUT_MS
+from dsfd.storage.schema import BUSY_TIMEOUT_MS, PARAMETER_SD_COLUMNS
 
-__all__ = ["CHECK_EVERY_S", "CROSSCHECK_WINDOW_S", "DAMPER_SHORT", "FindingsStage",
-           "NightSite", "detect"]
+__all__ = ["CHECK_EVERY_S", "CROSSCHECK_WINDOW_S", "DAMPER_SHORT", "PARAMETER_EVERY_S",
+           "PARAMETER_MIN_DAYS", "PARAMETER_WINDOW_S", "FindingsStage", "NightSite", "detect"]
 
 log = get_logger("dsfd.findings")
 
@@ -71,10 +78,19 @@ RESIDUAL_EVERY_S = 3600.0
 NIGHT_MIN_S = 8 * 86400.0
 NIGHT_WINDOW_S = 21 * 86400.0
 NIGHT_EVERY_S = 6 * 3600.0
+#: The parameter detector compares each day with the 7 days ending 2 days before it and
+#: needs 3 of them (ParameterSettings): it runs once 5 complete days of on-line estimates
+#: with their sd are stored, on the last 3 weeks, every 6 h (a day is judged once it ended).
+PARAMETER_MIN_DAYS = 5
+PARAMETER_WINDOW_S = 21 * 86400.0
+PARAMETER_EVERY_S = 6 * 3600.0
 #: Night: the sun this far below the horizon [deg] (civil twilight over), and below it
 #: :data:`NIGHT_AFTER_S` before too, so the day's heat has left the panes.
 NIGHT_SUN_DEG = -6.0
 NIGHT_AFTER_S = 2 * 3600.0
+#: How often the detectors that need days of history run: (name, every [s]).
+_CADENCE = (("residual", RESIDUAL_EVERY_S), ("night", NIGHT_EVERY_S),
+            ("parameter", PARAMETER_EVERY_S))
 _FLOW_KINDS = ("damper_no_flow", "cavity_no_flow", "cavity_flow_when_closed")
 #: Short damper names (the plant's, the findings'), by opening name.
 DAMPER_SHORT = {"exterior_bottom": "EB", "exterior_top": "ET", "interior_bottom": "IB",
@@ -177,12 +193,42 @@ def _night_finding(conn: sqlite3.Connection, now_s: float, site: NightSite) -> F
     return night_pane_check(t, col["x1_c"], col["t_out_c"], room, night, pane="x1_c")
 
 
+def _parameter_findings(conn: sqlite3.Connection, now_s: float) -> list[Finding] | None:
+    """The parameter detector on each θ parameter's daily values over the last
+    :data:`PARAMETER_WINDOW_S` of complete UTC days since the calibration last started from
+    its priors; None (not run) while fewer than :data:`PARAMETER_MIN_DAYS` days make a
+    series. Rows without a stored sd (before schema 8) are left out."""
+    until = math.floor(now_s / 86400.0) * 86400.0  # a day is judged once it ended
+    restart = conn.execute("SELECT MAX(time_s) FROM parameters WHERE source = 'prior' AND "
+                           "time_s < ?", (until,)).fetchone()[0]
+    since = until - PARAMETER_WINDOW_S if restart is None else \
+        max(until - PARAMETER_WINDOW_S, float(restart))
+    n = len(PARAMETER_NAMES)
+    rows = np.array(conn.execute(
+        f"SELECT time_s, {', '.join(PARAMETER_NAMES)}, {', '.join(PARAMETER_SD_COLUMNS)} "
+        "FROM parameters WHERE source = 'online' AND time_s >= ? AND time_s < ? "
+        "ORDER BY time_s", (since, until)).fetchall(), float).reshape(-1, 1 + 2 * n)
+    series = {}
+    for i, name in enumerate(PARAMETER_NAMES):
+        value = rows[:, 1 + i]
+        if name not in LINEAR_NAMES:  # the fitting coordinate, in which the sd is given
+            value = np.log(np.where(value > 0, value, np.nan))
+        series[name] = daily_estimates(rows[:, 0], value, rows[:, 1 + n + i])
+    if max(t.size for t, _, _ in series.values()) < PARAMETER_MIN_DAYS:
+        return None
+    found = (parameter_change(t, v, sd, name=name,
+                              unit="" if name in LINEAR_NAMES else LOG_UNIT)
+             for name, (t, v, sd) in series.items())
+    return [f for f in found if f is not None]
+
+
 def detect(conn: sqlite3.Connection, now_s: float, *, residuals: bool = True,
-           night: NightSite | None = None) -> tuple[list[Finding], set[str]]:
+           night: NightSite | None = None, parameters: bool = True
+           ) -> tuple[list[Finding], set[str]]:
     """What the detectors report on the rows stored up to ``now_s``, and the kinds judged
     (those of the detectors that ran): the cavity cross-check always, the residual CUSUM if
-    ``residuals``, the night check if ``night``; each of the last two once its history is
-    stored."""
+    ``residuals``, the night check if ``night``, the parameter detector if ``parameters``;
+    each of the last three once its history is stored."""
     found = [f for f in (_flow_finding(conn, now_s),) if f is not None]
     judged = set(_FLOW_KINDS)
     oldest = conn.execute("SELECT MIN(time_s) FROM decisions").fetchone()[0]
@@ -193,6 +239,10 @@ def detect(conn: sqlite3.Connection, now_s: float, *, residuals: bool = True,
     if night is not None and history_s >= NIGHT_MIN_S:
         found += [f for f in (_night_finding(conn, now_s, night),) if f is not None]
         judged |= {"pane_out_of_bounds", "pane_offset_shift"}
+    shifts = _parameter_findings(conn, now_s) if parameters else None
+    if shifts is not None:
+        found += shifts
+        judged.add("parameter_shift")
     return found, judged
 
 
@@ -206,7 +256,7 @@ class FindingsStage:
         self.night = night
         self.every_s = every_s
         self._last_s: float | None = None
-        #: The last check that ran the residual CUSUM, the night check.
+        #: The last check that ran the residual CUSUM, the night check, the parameters.
         self._ran_s: dict[str, float] = {}
         self._thread: threading.Thread | None = None
         #: Checks that failed (logged); the next one is tried as usual.
@@ -244,11 +294,13 @@ class FindingsStage:
 
     def check(self, conn: sqlite3.Connection, now_s: float) -> Changes:
         """One check at ``now_s`` on ``conn``: detect, reconcile, store, log."""
-        due = {name for name, every in (("residual", RESIDUAL_EVERY_S), ("night", NIGHT_EVERY_S))
+        due = {name for name, every in _CADENCE
                if abs(now_s - self._ran_s.get(name, -math.inf)) >= every}
         found, judged = detect(conn, now_s, residuals="residual" in due,
-                               night=self.night if "night" in due else None)
-        for name, kind in (("residual", "residual_shift"), ("night", "pane_offset_shift")):
+                               night=self.night if "night" in due else None,
+                               parameters="parameter" in due)
+        for name, kind in (("residual", "residual_shift"), ("night", "pane_offset_shift"),
+                           ("parameter", "parameter_shift")):
             if kind in judged:
                 self._ran_s[name] = now_s
         changes = reconcile(found, table.load(conn), judged=judged)
