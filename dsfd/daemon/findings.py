@@ -24,11 +24,11 @@ horizon two hours before).
 Every :data:`PARAMETER_EVERY_S` it runs :func:`~dsfd.estimation.diagnostics.parameter_change`
 per θ parameter on its on-line estimates of the last :data:`PARAMETER_WINDOW_S` of complete
 UTC days, each with the posterior sd stored with it (schema 8; in the fitting coordinates,
-log θ for the positive parameters), since the calibration last started from its priors:
+ln θ for the positive parameters), since the calibration last started from its priors:
 one value a day, the precision-weighted mean of the day's estimates with the sd of one of
-them (:func:`~dsfd.estimation.parameter_watch.daily_estimates`), once
-:data:`PARAMETER_MIN_DAYS` days make a series. A detector that did not run in a check ends
-none of its findings.
+them (:func:`~dsfd.estimation.parameter_watch.daily_estimates`, read by
+:mod:`dsfd.storage.parameter_series`), once :data:`PARAMETER_MIN_DAYS` days make a series.
+A detector that did not run in a check ends none of its findings.
 """
 
 from __future__ import annotations
@@ -44,16 +44,20 @@ from pathlib import Path
 
 import numpy as np
 
-from dsfd.config.panel import PARAMETER_NAMES, REGIME_OPENINGS
+from dsfd.config.panel import REGIME_OPENINGS
 from dsfd.daemon.logging_setup import get_logger
 from dsfd.estimation.crosschecks import cavity_flow_check, night_pane_check
 from dsfd.estimation.diagnostics import Finding, parameter_change, residual_change
 from dsfd.estimation.lifecycle import Changes, reconcile
-from dsfd.estimation.parameter_watch import LOG_UNIT, daily_estimates
-from dsfd.estimation.params import LINEAR_NAMES
 from dsfd.physics.solar.position import solar_position
 from dsfd.storage import findings as table
-from dsfd.storage.schema import BUSY_TIMEOUT_MS, PARAMETER_SD_COLUMNS
+from dsfd.storage.parameter_series import (
+    PARAMETER_MIN_DAYS,
+    PARAMETER_WINDOW_S,
+    parameter_series,
+    parameter_unit,
+)
+from dsfd.storage.schema import BUSY_TIMEOUT_MS
 
 __all__ = ["CHECK_EVERY_S", "CROSSCHECK_WINDOW_S", "DAMPER_SHORT", "PARAMETER_EVERY_S",
            "PARAMETER_MIN_DAYS", "PARAMETER_WINDOW_S", "FindingsStage", "NightSite", "detect"]
@@ -78,11 +82,8 @@ RESIDUAL_EVERY_S = 3600.0
 NIGHT_MIN_S = 8 * 86400.0
 NIGHT_WINDOW_S = 21 * 86400.0
 NIGHT_EVERY_S = 6 * 3600.0
-#: The parameter detector compares each day with the 7 days ending 2 days before it and
-#: needs 3 of them (ParameterSettings): it runs once 5 complete days of on-line estimates
-#: with their sd are stored, on the last 3 weeks, every 6 h (a day is judged once it ended).
-PARAMETER_MIN_DAYS = 5
-PARAMETER_WINDOW_S = 21 * 86400.0
+#: The parameter detector runs every 6 h (once PARAMETER_MIN_DAYS make a series): a day is
+#: judged once it ended.
 PARAMETER_EVERY_S = 6 * 3600.0
 #: Night: the sun this far below the horizon [deg] (civil twilight over), and below it
 #: :data:`NIGHT_AFTER_S` before too, so the day's heat has left the panes.
@@ -194,30 +195,12 @@ def _night_finding(conn: sqlite3.Connection, now_s: float, site: NightSite) -> F
 
 
 def _parameter_findings(conn: sqlite3.Connection, now_s: float) -> list[Finding] | None:
-    """The parameter detector on each θ parameter's daily values over the last
-    :data:`PARAMETER_WINDOW_S` of complete UTC days since the calibration last started from
-    its priors; None (not run) while fewer than :data:`PARAMETER_MIN_DAYS` days make a
-    series. Rows without a stored sd (before schema 8) are left out."""
-    until = math.floor(now_s / 86400.0) * 86400.0  # a day is judged once it ended
-    restart = conn.execute("SELECT MAX(time_s) FROM parameters WHERE source = 'prior' AND "
-                           "time_s < ?", (until,)).fetchone()[0]
-    since = until - PARAMETER_WINDOW_S if restart is None else \
-        max(until - PARAMETER_WINDOW_S, float(restart))
-    n = len(PARAMETER_NAMES)
-    rows = np.array(conn.execute(
-        f"SELECT time_s, {', '.join(PARAMETER_NAMES)}, {', '.join(PARAMETER_SD_COLUMNS)} "
-        "FROM parameters WHERE source = 'online' AND time_s >= ? AND time_s < ? "
-        "ORDER BY time_s", (since, until)).fetchall(), float).reshape(-1, 1 + 2 * n)
-    series = {}
-    for i, name in enumerate(PARAMETER_NAMES):
-        value = rows[:, 1 + i]
-        if name not in LINEAR_NAMES:  # the fitting coordinate, in which the sd is given
-            value = np.log(np.where(value > 0, value, np.nan))
-        series[name] = daily_estimates(rows[:, 0], value, rows[:, 1 + n + i])
-    if max(t.size for t, _, _ in series.values()) < PARAMETER_MIN_DAYS:
+    """The parameter detector on each θ parameter's daily series; None (not run) while the
+    series are too short."""
+    series = parameter_series(conn, now_s)
+    if series is None:
         return None
-    found = (parameter_change(t, v, sd, name=name,
-                              unit="" if name in LINEAR_NAMES else LOG_UNIT)
+    found = (parameter_change(t, v, sd, name=name, unit=parameter_unit(name))
              for name, (t, v, sd) in series.items())
     return [f for f in found if f is not None]
 
