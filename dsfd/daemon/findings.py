@@ -39,7 +39,7 @@ import math
 import sqlite3
 import threading
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -202,7 +202,15 @@ def _parameter_findings(conn: sqlite3.Connection, now_s: float) -> list[Finding]
         return None
     found = (parameter_change(t, v, sd, name=name, unit=parameter_unit(name))
              for name, (t, v, sd) in series.items())
-    return [f for f in found if f is not None]
+    return [_since_the_day(f) for f in found if f is not None]
+
+
+def _since_the_day(f: Finding) -> Finding:
+    """The finding dated from the start of the first day that moved (a daily value's time is
+    the day's last estimate; the change began some time during that day)."""
+    day_s = math.floor(f.start_s / 86400.0) * 86400.0
+    return replace(f, start_s=day_s, evidence=tuple(replace(e, since_s=day_s)
+                                                    for e in f.evidence))
 
 
 def detect(conn: sqlite3.Connection, now_s: float, *, residuals: bool = True,

@@ -100,7 +100,9 @@ def test_a_parameter_shift_is_found_after_it_started_and_says_what_it_means(
     assert f.kind == "parameter_shift" and f.evidence[0].signal == f"parameter:{name}"
     # found after the change, within three days; never before it
     assert SHIFT_AT < found_at <= SHIFT_AT + 3 * DAY
-    assert SHIFT_AT <= f.start_s < SHIFT_AT + DAY and f.detected_s <= found_at
+    # dated from the start of the day it began; detected when a day's evidence was complete
+    assert f.start_s == f.evidence[0].since_s == MIDNIGHT + 14 * DAY
+    assert SHIFT_AT < f.detected_s <= found_at
     assert f.evidence[0].unit == "log"
     assert np.exp(f.evidence[0].shift) == pytest.approx(factor, rel=0.25)
     assert f"{name} has {direction}" in f.action and cause in f.action
