@@ -33,7 +33,13 @@ from dsfd.config.panel import PanelConfig
 from dsfd.drivers.base import Command, Sample
 from dsfd.estimation.calibration import OnlineCalibrator, UpdateReport, window_start
 from dsfd.estimation.observer import observe
-from dsfd.estimation.params import FIT_NAMES, N_PARAMS, ParameterSpace, full_vector
+from dsfd.estimation.params import (
+    FIT_NAMES,
+    N_PARAMS,
+    PARAMETER_NAMES,
+    ParameterSpace,
+    full_vector,
+)
 from dsfd.estimation.state import CalibrationState, CalibrationStateError, state_from_dict
 from dsfd.estimation.stepdata import step_data
 from dsfd.measured import CONTROL_COLUMNS, KNOWN_COLUMNS, MeasuredData, MeasuredDataError
@@ -144,6 +150,13 @@ class CalibrationStage:
         """Every component of the fit vector by name (θ, then the offsets)."""
         return {k: float(v) for k, v in zip(FIT_NAMES, full_vector(self.calibrator.state.theta),
                                             strict=True)}
+
+    def posterior_sd_by_name(self) -> dict[str, float]:
+        """The posterior sd of each θ parameter in the fitting coordinates (of log θ for the
+        positive ones, a relative sd; of n itself): the square root of the diagonal of the
+        state's covariance, as the ``parameters`` table stores it (``sd_<name>``)."""
+        sd = np.sqrt(np.clip(np.diag(self.calibrator.state.cov_z), 0.0, None))
+        return {k: float(v) for k, v in zip(PARAMETER_NAMES, sd[:N_PARAMS], strict=True)}
 
     def reconfigure(self, cfg: PanelConfig, model: LumpedModel) -> str:
         """Use a reloaded configuration; keep θ̂ if it is valid under the new bounds."""

@@ -20,11 +20,16 @@ A check, on its own SQLite connection:
 Every :data:`NIGHT_EVERY_S`, once :data:`NIGHT_MIN_S` of history is stored, it also runs
 :func:`~dsfd.estimation.crosschecks.night_pane_check` on the exterior pane x1 over the last
 :data:`NIGHT_WINDOW_S` (readings with the sun 6° below the horizon that had it below the
-horizon two hours before). A detector that did not run in a check ends none of its
-findings.
+horizon two hours before).
 
-The parameter-change detector is not run by the daemon: it needs the calibration's
-posterior sd, which the daemon does not store.
+Every :data:`PARAMETER_EVERY_S` it runs :func:`~dsfd.estimation.diagnostics.parameter_change`
+per θ parameter on its on-line estimates of the last :data:`PARAMETER_WINDOW_S` of complete
+UTC days, each with the posterior sd stored with it (schema 8; in the fitting coordinates,
+ln θ for the positive parameters), since the calibration last started from its priors:
+one value a day, the precision-weighted mean of the day's estimates with the sd of one of
+them (:func:`~dsfd.estimation.parameter_watch.daily_estimates`, read by
+:mod:`dsfd.storage.parameter_series`), once :data:`PARAMETER_MIN_DAYS` days make a series.
+A detector that did not run in a check ends none of its findings.
 """
 
 from __future__ import annotations
@@ -34,12 +39,12 @@ import math
 import sqlite3
 import threading
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from dsfd.daemon.logging_setup import get_logger
 from dsfd.estimation.crosschecks import cavity_flow_check, night_pane_check
-from dsfd.estimation.diagnostics import Finding, residual_change
+from dsfd.estimation.diagnostics import Finding, parameter_change, residual_change
 from dsfd.estimation.lifecycle import Changes, reconcile
 from dsfd.storage import findings as table
 from dsfd.storage.evidence import (
@@ -54,11 +59,17 @@ from dsfd.storage.evidence import (
     night_series,
     residual_series,
 )
+from dsfd.storage.parameter_series import (
+    PARAMETER_MIN_DAYS,
+    PARAMETER_WINDOW_S,
+    parameter_series,
+    parameter_unit,
+)
 from dsfd.storage.schema import BUSY_TIMEOUT_MS
 
 __all__ = ["CHECK_EVERY_S", "CROSSCHECK_WINDOW_S", "DAMPER_SHORT", "NIGHT_EVERY_S",
-           "NIGHT_MIN_S", "RESIDUAL_EVERY_S", "RESIDUAL_MIN_S", "FindingsStage", "NightSite",
-           "detect"]
+           "NIGHT_MIN_S", "PARAMETER_EVERY_S", "PARAMETER_MIN_DAYS", "PARAMETER_WINDOW_S",
+           "RESIDUAL_EVERY_S", "RESIDUAL_MIN_S", "FindingsStage", "NightSite", "detect"]
 
 log = get_logger("dsfd.findings")
 
@@ -71,6 +82,12 @@ RESIDUAL_EVERY_S = 3600.0
 #: The night check runs every 6 h (once NIGHT_MIN_S is stored): a night is judged once it
 #: ended.
 NIGHT_EVERY_S = 6 * 3600.0
+#: The parameter detector runs every 6 h (once PARAMETER_MIN_DAYS make a series): a day is
+#: judged once it ended.
+PARAMETER_EVERY_S = 6 * 3600.0
+#: How often the detectors that need days of history run: (name, every [s]).
+_CADENCE = (("residual", RESIDUAL_EVERY_S), ("night", NIGHT_EVERY_S),
+            ("parameter", PARAMETER_EVERY_S))
 _FLOW_KINDS = ("damper_no_flow", "cavity_no_flow", "cavity_flow_when_closed")
 
 
@@ -110,12 +127,32 @@ def _night_finding(conn: sqlite3.Connection, now_s: float, site: NightSite) -> F
     return night_pane_check(s.time_s, s.pane_c, s.t_out_c, s.t_room_c, s.night, pane="x1_c")
 
 
+def _parameter_findings(conn: sqlite3.Connection, now_s: float) -> list[Finding] | None:
+    """The parameter detector on each θ parameter's daily series; None (not run) while the
+    series are too short."""
+    series = parameter_series(conn, now_s)
+    if series is None:
+        return None
+    found = (parameter_change(t, v, sd, name=name, unit=parameter_unit(name))
+             for name, (t, v, sd) in series.items())
+    return [_since_the_day(f) for f in found if f is not None]
+
+
+def _since_the_day(f: Finding) -> Finding:
+    """The finding dated from the start of the first day that moved (a daily value's time is
+    the day's last estimate; the change began some time during that day)."""
+    day_s = math.floor(f.start_s / 86400.0) * 86400.0
+    return replace(f, start_s=day_s, evidence=tuple(replace(e, since_s=day_s)
+                                                    for e in f.evidence))
+
+
 def detect(conn: sqlite3.Connection, now_s: float, *, residuals: bool = True,
-           night: NightSite | None = None) -> tuple[list[Finding], set[str]]:
+           night: NightSite | None = None, parameters: bool = True
+           ) -> tuple[list[Finding], set[str]]:
     """What the detectors report on the rows stored up to ``now_s``, and the kinds judged
     (those of the detectors that ran): the cavity cross-check always, the residual CUSUM if
-    ``residuals``, the night check if ``night``; each of the last two once its history is
-    stored."""
+    ``residuals``, the night check if ``night``, the parameter detector if ``parameters``;
+    each of the last three once its history is stored."""
     found = [f for f in (_flow_finding(conn, now_s),) if f is not None]
     judged = set(_FLOW_KINDS)
     oldest = conn.execute("SELECT MIN(time_s) FROM decisions").fetchone()[0]
@@ -126,6 +163,10 @@ def detect(conn: sqlite3.Connection, now_s: float, *, residuals: bool = True,
     if night is not None and history_s >= NIGHT_MIN_S:
         found += [f for f in (_night_finding(conn, now_s, night),) if f is not None]
         judged |= {"pane_out_of_bounds", "pane_offset_shift"}
+    shifts = _parameter_findings(conn, now_s) if parameters else None
+    if shifts is not None:
+        found += shifts
+        judged.add("parameter_shift")
     return found, judged
 
 
@@ -139,7 +180,7 @@ class FindingsStage:
         self.night = night
         self.every_s = every_s
         self._last_s: float | None = None
-        #: The last check that ran the residual CUSUM, the night check.
+        #: The last check that ran the residual CUSUM, the night check, the parameters.
         self._ran_s: dict[str, float] = {}
         self._thread: threading.Thread | None = None
         #: Checks that failed (logged); the next one is tried as usual.
@@ -177,11 +218,13 @@ class FindingsStage:
 
     def check(self, conn: sqlite3.Connection, now_s: float) -> Changes:
         """One check at ``now_s`` on ``conn``: detect, reconcile, store, log."""
-        due = {name for name, every in (("residual", RESIDUAL_EVERY_S), ("night", NIGHT_EVERY_S))
+        due = {name for name, every in _CADENCE
                if abs(now_s - self._ran_s.get(name, -math.inf)) >= every}
         found, judged = detect(conn, now_s, residuals="residual" in due,
-                               night=self.night if "night" in due else None)
-        for name, kind in (("residual", "residual_shift"), ("night", "pane_offset_shift")):
+                               night=self.night if "night" in due else None,
+                               parameters="parameter" in due)
+        for name, kind in (("residual", "residual_shift"), ("night", "pane_offset_shift"),
+                           ("parameter", "parameter_shift")):
             if kind in judged:
                 self._ran_s[name] = now_s
         changes = reconcile(found, table.load(conn), judged=judged)

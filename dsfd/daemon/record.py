@@ -78,7 +78,11 @@ def cycle_record(out: CycleOutcome, weather: CycleWeather, calibration: Calibrat
     return CycleRecord(cycle=out.cycle, time_s=out.time_s, samples=samples, decision=decision,
                        parameters=params, events=events, model=model_row(out),
                        command_results=out.command_results,
-                       comfort=comfort_row(out, calibration.cfg.comfort))
+                       comfort=comfort_row(out, calibration.cfg.comfort),
+                       # the state's sd with its θ (schema 8): what the parameter detector
+                       # weighs a change of the history against
+                       parameter_sd=None if params is None else
+                       calibration.posterior_sd_by_name())
 
 
 def _override_columns(o: OccupancyOverride | None) -> dict[str, Any]:

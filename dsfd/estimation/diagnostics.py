@@ -9,7 +9,9 @@ Pure functions (no files, clocks or logging): arrays in, a :class:`Finding` or N
 * :func:`parameter_change` — one calibrated parameter's history (e.g. one estimate a day)
   with the calibration's posterior sd: each estimate's distance from the precision-weighted
   mean of a trailing reference, in posterior sd, then the same CUSUM with an allowance of
-  1.5 sd, so that estimates wandering within their posterior sd never add up to a finding.
+  1.5 sd, so that estimates wandering within their posterior sd never add up to a finding;
+  the action says what that parameter's change means for the façade
+  (:func:`dsfd.estimation.parameter_watch.parameter_action`).
 
 The physical cross-checks are in :mod:`dsfd.estimation.crosschecks`.
 """
@@ -20,6 +22,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+
+from dsfd.estimation.parameter_watch import parameter_action
 
 __all__ = ["Cusum", "Evidence", "Finding", "ParameterSettings", "ResidualBlocks",
            "ResidualSettings", "block_means", "cusum_confidence", "page_cusum",
@@ -368,7 +372,7 @@ def parameter_change(times_s: np.ndarray, values: np.ndarray, sds: np.ndarray, *
         The estimates and their posterior sd in the same coordinates (for a positive
         parameter the calibration's log coordinates make the sd relative).
     name, unit : str
-        For the evidence.
+        For the evidence and the action (``unit`` ``"log"``: values and sds are of log θ).
 
     Notes
     -----
@@ -399,9 +403,7 @@ def parameter_change(times_s: np.ndarray, values: np.ndarray, sds: np.ndarray, *
     ev = Evidence(signal=f"parameter:{name}", shift=float(np.nanmean(v[after] - ref_mean[after])),
                   shift_sd=float(np.nanmean(z[after])), unit=unit, since_s=float(t[cs.start]),
                   statistic=float(cs.statistic[-1]), threshold=st.h_sd)
-    direction = "risen" if cs.side > 0 else "fallen"
     return Finding(kind="parameter_shift", confidence=cusum_confidence(ev.statistic, st.h_sd),
                    start_s=ev.since_s, detected_s=float(t[cs.alarm]), evidence=(ev,),
-                   action=(f"the calibrated {name} has {direction} by {abs(ev.shift_sd):.1f} "
-                           "posterior sd: the façade changed (glass, screen, dampers) or the "
-                           "sensors the fit rests on did"))
+                   action=parameter_action(name, side=cs.side, shift=ev.shift,
+                                           shift_sd=ev.shift_sd, unit=unit))

@@ -42,12 +42,15 @@ from dsfd.config.parameters import (
 )
 from dsfd.physics.coupling import StepInputs
 
-__all__ = ["FIT_NAMES", "N_FIT", "N_PARAMS", "OFFSET_NAMES", "ORIFICE_REGIMES",
+__all__ = ["FIT_NAMES", "LINEAR_NAMES", "N_FIT", "N_PARAMS", "OFFSET_NAMES", "ORIFICE_REGIMES",
            "PARAMETER_NAMES", "POWER_LAW_REGIMES", "Param", "ParameterSpace", "full_vector",
            "with_offsets"]
 
 #: The offsets q in ϑ.
 I_Q = np.arange(N_PARAMS, N_FIT)
+#: Components fitted as they are, not as their log: the exponent n (its range is not a
+#: scale) and the offsets (which change sign).
+LINEAR_NAMES = frozenset({"n", *OFFSET_NAMES})
 #: Regimes whose flow law uses f (orifice paths) and c, n (power-law paths).
 ORIFICE_REGIMES = frozenset({1, 2, 3, 4, 9})
 POWER_LAW_REGIMES = frozenset({5, 6, 7, 8})
@@ -109,7 +112,7 @@ class ParameterSpace:
         default = np.array([*p.values("default"), *[0.0] * n_q])
         lower = np.array([*p.values("lower"), *[-s.offset_bound_wm2] * n_q])
         upper = np.array([*p.values("upper"), *[s.offset_bound_wm2] * n_q])
-        is_log = np.array([k not in ("n", *OFFSET_NAMES) for k in FIT_NAMES])
+        is_log = np.array([k not in LINEAR_NAMES for k in FIT_NAMES])
         prior_sd = np.array([s.prior_sd_n if k == "n" else s.offset_sd_wm2 if k in OFFSET_NAMES
                              else s.prior_log_sd for k in FIT_NAMES])
         drift_sd = np.where(np.isin(FIT_NAMES, OFFSET_NAMES), s.offset_drift_wm2_per_h,

@@ -28,6 +28,7 @@ __all__ = [
     "MIGRATIONS",
     "MODEL_COLUMNS",
     "MQTT_CURSOR_TABLE",
+    "PARAMETER_SD_COLUMNS",
     "SCHEMA",
     "SCHEMA_VERSION",
     "SchemaTooNewError",
@@ -38,7 +39,7 @@ __all__ = [
 ]
 
 DB_NAME = "timeseries.sqlite"
-SCHEMA_VERSION = 7
+SCHEMA_VERSION = 8
 #: How long a connection waits for another one's lock before a statement fails [ms].
 BUSY_TIMEOUT_MS = 5000
 
@@ -87,6 +88,11 @@ CREATE TABLE IF NOT EXISTS findings (
 CREATE INDEX IF NOT EXISTS findings_by_state ON findings (state, kind);
 """
 
+#: Columns of ``parameters`` (schema 8; docs/storage-schema.md): the calibration's posterior
+#: sd of each θ parameter, in the fitting coordinates (of log θ for the positive parameters,
+#: so a relative sd; of n itself), from the diagonal of the state's covariance.
+PARAMETER_SD_COLUMNS: tuple[str, ...] = tuple(f"sd_{name}" for name in PARAMETER_NAMES)
+
 #: Schema changes, in order: ``MIGRATIONS[v]`` is the SQL script that takes a database of
 #: version ``v - 1`` to ``v`` (``ALTER TABLE … ADD COLUMN``; new tables come from
 #: :data:`SCHEMA`, whose ``CREATE … IF NOT EXISTS`` always describes the newest version).
@@ -121,6 +127,9 @@ MIGRATIONS: dict[int, str] = {
     """,
     # Fault and drift diagnostics (issue 38): the findings of the daemon's detectors.
     7: FINDINGS_TABLE,
+    # ... and the calibration's posterior sd with each parameter row, which the parameter
+    # detector weighs the history's changes against (NULL in rows written before).
+    8: ";\n".join(f"ALTER TABLE parameters ADD COLUMN {c} REAL" for c in PARAMETER_SD_COLUMNS),
 }
 
 _STATES = ("x1", "x2", "x3", "x4", "x5")
@@ -157,6 +166,7 @@ COMFORT_COLUMNS: tuple[tuple[str, str], ...] = (
 _COMFORT_DDL = ",\n    ".join(f"{name} {kind}" for name, kind in COMFORT_COLUMNS)
 
 _PARAM_COLUMNS = ", ".join(f"{name} REAL" for name in PARAMETER_NAMES)
+_PARAM_SD_DDL = ",\n    ".join(f"{name} REAL" for name in PARAMETER_SD_COLUMNS)
 SCHEMA = f"""
 CREATE TABLE IF NOT EXISTS meta (
     key TEXT PRIMARY KEY,
@@ -229,6 +239,7 @@ CREATE TABLE IF NOT EXISTS parameters (
     other TEXT NOT NULL DEFAULT '{{}}',
     cost REAL,
     detail TEXT NOT NULL DEFAULT '',
+    {_PARAM_SD_DDL},
     PRIMARY KEY (run_id, cycle)
 );
 CREATE TABLE IF NOT EXISTS events (

@@ -40,6 +40,7 @@ from dsfd.storage.schema import (
     MIGRATIONS,
     MODEL_COLUMNS,
     MQTT_CURSOR_TABLE,
+    PARAMETER_SD_COLUMNS,
     SCHEMA_VERSION,
     SchemaTooNewError,
     connect_checked,
@@ -56,6 +57,7 @@ __all__ = [
     "MIGRATIONS",
     "MODEL_COLUMNS",
     "MQTT_CURSOR_TABLE",
+    "PARAMETER_SD_COLUMNS",
     "SCHEMA_VERSION",
     "CycleRecord",
     "LateEvent",
@@ -84,7 +86,9 @@ class CycleRecord:
     → value of the ``model`` table (:data:`MODEL_COLUMNS`; absent ones are NULL);
     ``command_results``: (command_id, status, reason) of the operator commands this cycle
     handled (``applied`` or ``rejected``); ``comfort``: column → value of the ``comfort``
-    table (:data:`COMFORT_COLUMNS`, schema 6).
+    table (:data:`COMFORT_COLUMNS`, schema 6); ``parameter_sd``: the posterior sd of the
+    ``parameters`` row's θ by parameter name, in the fitting coordinates (the columns
+    :data:`PARAMETER_SD_COLUMNS`, schema 8; absent ones are NULL).
     """
 
     cycle: int
@@ -96,6 +100,7 @@ class CycleRecord:
     model: Mapping[str, float | int | None] | None = None
     command_results: Sequence[tuple[int, str, str]] = field(default_factory=tuple)
     comfort: Mapping[str, Any] | None = None
+    parameter_sd: Mapping[str, float] | None = None
 
 
 #: An event recorded outside its own cycle: (cycle, time_s, level, kind, message).
@@ -183,13 +188,14 @@ class Store:
             if rec.parameters is not None:
                 source, theta, cost, detail = rec.parameters
                 other = {k: v for k, v in theta.items() if k not in PARAMETER_NAMES}
+                sd = rec.parameter_sd or {}
+                cols = [*PARAMETER_NAMES, "other", "cost", "detail", *PARAMETER_SD_COLUMNS]
                 self.conn.execute(
-                    f"INSERT INTO parameters (run_id, cycle, time_s, source, "
-                    f"{', '.join(PARAMETER_NAMES)}, other, cost, detail) VALUES (?, ?, ?, ?, "
-                    f"{', '.join('?' for _ in PARAMETER_NAMES)}, ?, ?, ?)",
+                    f"INSERT INTO parameters (run_id, cycle, time_s, source, {', '.join(cols)}) "
+                    f"VALUES (?, ?, ?, ?, {', '.join('?' for _ in cols)})",
                     (run, rec.cycle, rec.time_s, source,
                      *(_num(theta.get(n)) for n in PARAMETER_NAMES), _sql(other), _num(cost),
-                     detail))
+                     detail, *(_num(sd.get(n)) for n in PARAMETER_NAMES)))
             if rec.model is not None:
                 self._row("model", run, rec, rec.model, MODEL_COLUMNS)
             if rec.comfort is not None:

@@ -8,11 +8,17 @@ data); the printed summary and ``--summary-json`` are checked against the SQLite
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 from collections import Counter
 from pathlib import Path
 
+import numpy as np
+import pytest
+
+from dsfd.config.panel import PARAMETER_NAMES
 from dsfd.daemon.summary import REGIME_NAMES
+from dsfd.storage.schema import PARAMETER_SD_COLUMNS
 from tests.daemon.harness import MORNING_ISO, ROOT, dsfd_command, query, write_panel
 
 CYCLES = 40
@@ -60,6 +66,17 @@ def test_summary_reports_regimes_louver_heat_and_calibration(tmp_path: Path) -> 
     assert summary["theta_end"]["f"] == online[-1][2]
     saved = json.loads((state / "calibration.json").read_text())
     assert summary["theta_end"]["h_out"] == saved["theta"]["h_out"]
+    # Each on-line row carries the posterior sd the parameter detector needs (schema 8):
+    # finite and positive, and the last row's that of the saved state's covariance (written
+    # by another path, calibration.json, in the fitting coordinates).
+    sds = query(db, f"SELECT {', '.join(PARAMETER_SD_COLUMNS)} FROM parameters WHERE "
+                "source = 'online' ORDER BY cycle")
+    assert len(sds) == len(online)
+    assert all(v is not None and math.isfinite(v) and v > 0 for row in sds for v in row)
+    cov = np.array(saved["cov_z"])
+    assert np.sqrt(np.diag(cov))[:len(PARAMETER_NAMES)] == pytest.approx(sds[-1], rel=1e-9)
+    # the flow law's f moved on this data: its sd is below the first prior's (0.7 in log)
+    assert sds[-1][PARAMETER_NAMES.index("f")] < saved["prior_sd_z"]["f"]
 
     # Heat into the room from the simulated plant: a clear winter morning lets sun in.
     heat = summary["room_heat_kwh"]

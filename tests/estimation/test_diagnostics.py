@@ -136,6 +136,8 @@ def test_a_parameter_step_is_found_after_it_and_never_before(seed):
     assert f.start_s == t[change]
     ev, = f.evidence
     assert ev.signal == "parameter:f" and 2.5 < ev.shift_sd < 5.5
+    # the action says what a risen path resistance means for the façade
+    assert f.action.startswith("f has risen by 0.") and "insect screens" in f.action
     assert parameter_change(t[:change], v[:change], sd[:change], name="f") is None
 
 

@@ -53,7 +53,7 @@ def test_a_schema_6_database_is_migrated_and_the_findings_live_in_it(tmp_path: P
     store = Store.open(tmp_path)
     conn = store.conn
     meta = dict(conn.execute("SELECT key, value FROM meta"))
-    assert SCHEMA_VERSION == 7 and meta["schema_version"] == "7" and "migrated_to_7" in meta
+    assert meta["schema_version"] == str(SCHEMA_VERSION) and "migrated_to_7" in meta
     assert _counts(conn) == before
     assert table.open_findings(conn) == []
 

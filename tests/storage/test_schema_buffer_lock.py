@@ -36,9 +36,9 @@ def test_a_version_1_database_is_migrated_in_place_and_keeps_its_rows(tmp_path: 
     store = Store.open(tmp_path)
     assert store.moved_aside is None
     meta = dict(store.conn.execute("SELECT key, value FROM meta"))
-    assert meta["schema_version"] == str(SCHEMA_VERSION) == "7"
+    assert meta["schema_version"] == str(SCHEMA_VERSION) == "8"
     assert {"migrated_to_2", "migrated_to_3", "migrated_to_4", "migrated_to_5",
-            "migrated_to_6", "migrated_to_7"} <= set(meta)
+            "migrated_to_6", "migrated_to_7", "migrated_to_8"} <= set(meta)
     old = store.conn.execute("SELECT COUNT(*), COUNT(hold_source), COUNT(hold_expires_s), "
                              "COUNT(hold_command_id), COUNT(run_elapsed_s), "
                              "COUNT(objective_mode), COUNT(mode_command_id) FROM decisions"

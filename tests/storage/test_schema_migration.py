@@ -8,7 +8,7 @@ from __future__ import annotations
 import sqlite3
 from pathlib import Path
 
-from dsfd.storage.timeseries import MIGRATIONS, SCHEMA_VERSION, Store
+from dsfd.storage.timeseries import MIGRATIONS, PARAMETER_SD_COLUMNS, SCHEMA_VERSION, Store
 
 
 def test_a_schema_1_database_is_migrated_and_keeps_its_rows(tmp_path: Path) -> None:
@@ -18,7 +18,7 @@ def test_a_schema_1_database_is_migrated_and_keeps_its_rows(tmp_path: Path) -> N
     store.close()
     db = tmp_path / "timeseries.sqlite"
     step = next(v for v, sql in MIGRATIONS.items() if "mqtt_cursor" in sql)
-    assert SCHEMA_VERSION == step + 5  # five later steps, undone below (see the docstring)
+    assert SCHEMA_VERSION == step + 6  # six later steps, undone below (see the docstring)
     with sqlite3.connect(db) as conn:  # what the dsfd before this step left behind
         conn.execute("DROP TABLE mqtt_cursor")
         conn.execute("DROP TABLE model")  # step 3 (issue 21): the model table ...
@@ -26,6 +26,8 @@ def test_a_schema_1_database_is_migrated_and_keeps_its_rows(tmp_path: Path) -> N
         conn.execute("DROP TABLE commands")  # step 4 (issue 20): the command table ...
         conn.execute("DROP TABLE comfort")  # step 6 (issue 36): comfort, occupancy override
         conn.execute("DROP TABLE findings")  # step 7 (issue 38): the diagnostics' findings
+        for column in PARAMETER_SD_COLUMNS:  # step 8 (issue 38): the posterior sd of θ
+            conn.execute(f"ALTER TABLE parameters DROP COLUMN {column}")
         for column in ("hold_source", "hold_expires_s", "hold_command_id", "run_elapsed_s",
                        "objective_mode", "mode_command_id", "occupancy_override",
                        "occupancy_until_s", "occupancy_command_id"):  # ... holds; step 5

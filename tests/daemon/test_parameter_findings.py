@@ -1,0 +1,164 @@
+"""The daemon's parameter detector on a database it could have written (dsfd.daemon.findings,
+docs/model.md#findings): three weeks of on-line estimates with their posterior sd, written
+by the daemon's Store. A path resistance doubled or a room-side convection fallen is found
+after the change (never before), and the finding names the parameter, the direction and
+what it means for the façade. A clean wander within the sd, or a restart from the priors,
+is no finding, while the same wander stored with overconfident sds is. While the detector
+lacks its five days, or is not due, it ends none of its findings."""
+
+from __future__ import annotations
+
+import sqlite3
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from dsfd.daemon.findings import PARAMETER_EVERY_S, PARAMETER_MIN_DAYS, FindingsStage, detect
+from dsfd.estimation.diagnostics import Evidence, Finding
+from dsfd.estimation.lifecycle import Changes
+from dsfd.storage import findings as table
+from dsfd.storage.timeseries import CycleRecord, Store
+
+DAY = 86400.0
+MIDNIGHT = 19675 * DAY  # 2023-11-14 00:00 UTC
+DEFAULTS = {"h_out": 12.0, "h_ca1": 3.5, "h_ca2": 4.0, "h_ca3": 3.5, "h_ca4": 4.4,
+            "h_in": 2.5, "f": 100.0, "c": 0.05, "n": 0.6}
+#: Posterior sd of each parameter's on-line estimates, in the fitting coordinates (ln θ; n).
+SIGMA = {"h_out": 0.08, "h_ca1": 0.06, "h_ca2": 0.1, "h_ca3": 0.06, "h_ca4": 0.05,
+         "h_in": 0.08, "f": 0.15, "c": 0.2, "n": 0.03}
+HISTORY_DAYS = 21
+SHIFT_AT = MIDNIGHT + 14 * DAY + 6 * 3600.0  # 06:00 on the 15th day
+
+
+def _decision(cycle: int, t: float) -> dict[str, object]:
+    return {"slot": cycle, "time_s": t, "time_utc": "t", "method": "mpc", "phi_deg": 0.0,
+            "afr": 10, "or_pct": 0.0, "write_status": "dry-run", "cycle_ms": 1.0}
+
+
+def _parameter_history(tmp_path: Path, *, seed: int = 0, shift: dict[str, float] | None = None,
+                       sd_scale: float = 1.0, restart_at: float | None = None) -> Path:
+    """Three weeks of hourly on-line estimates written by the daemon's Store, from noon of
+    the first day (a partial day): each parameter wanders from day to day uniformly within
+    ± its posterior sd (a clean façade), has a daily cycle of one sd (what a lumped model's
+    4-h windows make of the sun) and correlated hour-to-hour noise (AR(1), φ 0.8, half an
+    sd); ``shift`` adds ln-factors (or to n) from :data:`SHIFT_AT` on. The stored sds are
+    the posterior sds ×U(0.8, 1.25), × ``sd_scale``. ``restart_at``: the calibration
+    starts again from its priors there (a ``prior`` row)."""
+    rng = np.random.default_rng(seed)
+    store = Store.open(tmp_path)
+    store.begin_run(panel="p", mode="test", version="0", config_path=None)
+    t = MIDNIGHT + 12 * 3600.0 + 3600.0 * np.arange(int((HISTORY_DAYS - 0.5) * 24))
+    day = ((t - MIDNIGHT) // DAY).astype(int)
+    z = {}
+    for name, sigma in SIGMA.items():
+        ar = np.zeros(t.size)
+        for i in range(1, t.size):
+            ar[i] = 0.8 * ar[i - 1] + rng.normal(0.0, 0.5 * sigma * np.sqrt(1 - 0.64))
+        z[name] = (rng.uniform(-1.0, 1.0, HISTORY_DAYS)[day] * sigma + ar
+                   + sigma * np.sin(2 * np.pi * t / DAY)
+                   + np.where(t >= SHIFT_AT, (shift or {}).get(name, 0.0), 0.0))
+    prior_sd = {name: 0.15 if name == "n" else 0.7 for name in SIGMA}
+    rows = [(t[0] - 60.0, "prior", DEFAULTS, prior_sd)]
+    for i, ti in enumerate(t):
+        if restart_at is not None and t[i - 1] < restart_at <= ti:
+            rows.append((restart_at, "prior", DEFAULTS, prior_sd))
+        theta = {n: (v + z[n][i] if n == "n" else v * np.exp(z[n][i]))
+                 for n, v in DEFAULTS.items()}
+        sd = {n: s * sd_scale * rng.uniform(0.8, 1.25) for n, s in SIGMA.items()}
+        rows.append((float(ti), "online", theta, sd))
+    for cycle, (ti, source, theta, sd) in enumerate(rows, start=1):
+        store.append(CycleRecord(cycle=cycle, time_s=ti, samples=[],
+                                 decision=_decision(cycle, ti),
+                                 parameters=(source, theta, 1.0, "100 residuals"),
+                                 parameter_sd=sd))
+    store.close()
+    return tmp_path / "timeseries.sqlite"
+
+
+def _checks(db: Path) -> list[tuple[float, Changes]]:
+    """The stage's checks every 6 h (the parameter detector's cadence) from the 5th day on."""
+    stage = FindingsStage(db, run_id=lambda: 1)
+    conn = sqlite3.connect(db)
+    try:
+        return [(now, stage.check(conn, now)) for now in
+                MIDNIGHT + 4 * DAY + PARAMETER_EVERY_S * np.arange(HISTORY_DAYS * 4 - 15)]
+    finally:
+        conn.close()
+
+
+@pytest.mark.parametrize(("name", "factor", "direction", "cause"), [
+    ("f", 2.0, "risen", "clean the insect screens"),  # a clogging screen: path resistance x2
+    ("h_in", 0.6, "fallen", "blind or curtain drawn"),
+])
+def test_a_parameter_shift_is_found_after_it_started_and_says_what_it_means(
+        tmp_path, name, factor, direction, cause):
+    db = _parameter_history(tmp_path, shift={name: float(np.log(factor))})
+    checks = _checks(db)
+    opened = [(now, f) for now, changes in checks for f in changes.opened]
+    (found_at, f), = opened  # one finding, and it stays open (refreshed)
+    assert f.kind == "parameter_shift" and f.evidence[0].signal == f"parameter:{name}"
+    # found after the change, within three days; never before it
+    assert SHIFT_AT < found_at <= SHIFT_AT + 3 * DAY
+    # dated from the start of the day it began; detected when a day's evidence was complete
+    assert f.start_s == f.evidence[0].since_s == MIDNIGHT + 14 * DAY
+    assert SHIFT_AT < f.detected_s <= found_at
+    assert f.evidence[0].unit == "log"
+    assert np.exp(f.evidence[0].shift) == pytest.approx(factor, rel=0.25)
+    assert f"{name} has {direction}" in f.action and cause in f.action
+    assert all(not c.ended for _, c in checks)
+    conn = sqlite3.connect(db)
+    try:
+        assert conn.execute("SELECT kind, subject, state FROM findings").fetchall() == [
+            ("parameter_shift", f"parameter:{name}", "open")]
+    finally:
+        conn.close()
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_a_clean_wander_within_the_posterior_sd_is_no_finding(tmp_path, seed):
+    db = _parameter_history(tmp_path, seed=seed)
+    assert not any(c.opened for _, c in _checks(db))
+
+
+def test_the_same_wander_stored_with_overconfident_sds_is_a_finding(tmp_path):
+    """The check weighs the history against the stored sds: the clean history of the test
+    above with sds ten times smaller is a finding."""
+    db = _parameter_history(tmp_path, seed=0, sd_scale=0.1)
+    assert any(f.kind == "parameter_shift" for _, c in _checks(db) for f in c.opened)
+
+
+def test_a_calibration_restarted_from_its_priors_starts_a_new_history(tmp_path):
+    """The jump at a restart from the priors is no finding: the days before it are not the
+    reference of the days after it."""
+    db = _parameter_history(tmp_path, shift={"f": float(np.log(2.0))}, restart_at=SHIFT_AT)
+    assert not any(c.opened for _, c in _checks(db))
+
+
+def test_the_parameter_detector_not_run_ends_none_of_its_findings(tmp_path):
+    """An open parameter finding stays open while the detector lacks its five days (a
+    restart from the priors) or is not due, and ends once it runs and no longer sees it."""
+    restart = MIDNIGHT + 13 * DAY + 12 * 3600.0
+    db = _parameter_history(tmp_path, restart_at=restart)
+    ev = Evidence(signal="parameter:f", shift=0.7, shift_sd=4.6, unit="log",
+                  since_s=MIDNIGHT + 10 * DAY, statistic=6.0, threshold=5.0)
+    old = Finding(kind="parameter_shift", confidence=0.6, start_s=ev.since_s,
+                  detected_s=ev.since_s + DAY, evidence=(ev,), action="clean the screens")
+    conn = sqlite3.connect(db)
+    try:
+        table.apply(conn, Changes(opened=[old]), now_s=ev.since_s + DAY, run_id=1)
+        stage = FindingsStage(db, run_id=lambda: 1)
+        # four complete days since the restart: too few, nothing judged, nothing ended
+        early = restart + 4.6 * DAY
+        assert "parameter_shift" not in detect(conn, early)[1]
+        assert not stage.check(conn, early).ended
+        # five: the detector runs, and the evidence is not there
+        ready = restart + 5.6 * DAY
+        assert PARAMETER_MIN_DAYS == 5 and "parameter_shift" in detect(conn, ready)[1]
+        assert stage.check(conn, ready).ended == [1]
+        # a finding opened now stays open while the detector is not due (6-hourly)
+        [again] = table.apply(conn, Changes(opened=[old]), now_s=ready, run_id=1)
+        assert not stage.check(conn, ready + 600.0).ended
+        assert stage.check(conn, ready + PARAMETER_EVERY_S).ended == [again]
+    finally:
+        conn.close()
