@@ -30,6 +30,10 @@ one value a day, the precision-weighted mean of the day's estimates with the sd 
 them (:func:`~dsfd.estimation.parameter_watch.daily_estimates`, read by
 :mod:`dsfd.storage.parameter_series`), once :data:`PARAMETER_MIN_DAYS` days make a series.
 A detector that did not run in a check ends none of its findings.
+
+A parameter finding gets the energy at stake of its change when the stage knows the panel
+(:func:`dsfd.daemon.stake.with_stake`: the model's J over the last week's stored weather and
+commands with the parameter before and after, docs/model.md#energy-at-stake).
 """
 
 from __future__ import annotations
@@ -42,7 +46,9 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from dsfd.config.panel import PanelConfig
 from dsfd.daemon.logging_setup import get_logger
+from dsfd.daemon.stake import with_stake
 from dsfd.estimation.crosschecks import cavity_flow_check, night_pane_check
 from dsfd.estimation.diagnostics import Finding, parameter_change, residual_change
 from dsfd.estimation.lifecycle import Changes, reconcile
@@ -174,10 +180,13 @@ class FindingsStage:
     """Runs :func:`detect` off the loop and keeps the ``findings`` table up to date."""
 
     def __init__(self, database: Path, *, run_id: Callable[[], int | None],
-                 night: NightSite | None = None, every_s: float = CHECK_EVERY_S) -> None:
+                 night: NightSite | None = None, panel: PanelConfig | None = None,
+                 every_s: float = CHECK_EVERY_S) -> None:
         self.database = database
         self.run_id = run_id
         self.night = night
+        #: The panel, for the energy at stake of a parameter finding (None: not costed).
+        self.panel = panel
         self.every_s = every_s
         self._last_s: float | None = None
         #: The last check that ran the residual CUSUM, the night check, the parameters.
@@ -223,6 +232,10 @@ class FindingsStage:
         found, judged = detect(conn, now_s, residuals="residual" in due,
                                night=self.night if "night" in due else None,
                                parameters="parameter" in due)
+        if self.panel is not None:
+            found = [with_stake(conn, f, now_s, panel=self.panel,
+                                state_dir=self.database.parent)
+                     if f.kind == "parameter_shift" else f for f in found]
         for name, kind in (("residual", "residual_shift"), ("night", "pane_offset_shift"),
                            ("parameter", "parameter_shift")):
             if kind in judged:

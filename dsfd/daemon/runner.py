@@ -151,7 +151,7 @@ class _Daemon:
         #: The diagnostics, run off the loop on what was stored (issue 38).
         self.findings = FindingsStage(store.path, run_id=lambda: store.run_id, night=NightSite(
             latitude_deg=cfg.site.latitude_deg, longitude_deg=cfg.site.longitude_deg,
-            room_c=cfg.room.t_in_c))
+            room_c=cfg.room.t_in_c), panel=cfg)
 
     async def wait_until(self, deadline_s: float) -> None:
         """Sleep until the deadline, or until a signal asks to stop or reload."""
@@ -279,6 +279,7 @@ class _Daemon:
         if new.daemon.metrics_file != self.cfg.daemon.metrics_file:
             self.metrics = _metrics_file(new)
         self.store.buffer.capacity = new.daemon.store_buffer_cycles
+        self.findings.panel = new  # the next stake is costed with the reloaded panel
         self.cfg = new
         log.info("configuration reloaded", file=str(path), calibration=note,
                  after_cycle=self.controller.cycles)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+import sqlite3
 import subprocess
 from collections import Counter
 from pathlib import Path
@@ -16,25 +17,40 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from dsfd.config import load_panel
 from dsfd.config.panel import PARAMETER_NAMES
+from dsfd.control.stake import energy_at_stake
+from dsfd.daemon.stake import with_stake
 from dsfd.daemon.summary import REGIME_NAMES
+from dsfd.estimation.diagnostics import Evidence, Finding
+from dsfd.estimation.params import FIT_NAMES
+from dsfd.estimation.stepdata import model_config, step_data
+from dsfd.physics.model import LumpedModel
+from dsfd.storage.measured_csv import read_measured
 from dsfd.storage.schema import PARAMETER_SD_COLUMNS
 from tests.daemon.harness import MORNING_ISO, ROOT, dsfd_command, query, write_panel
 
 CYCLES = 40
 
 
-def test_summary_reports_regimes_louver_heat_and_calibration(tmp_path: Path) -> None:
+@pytest.fixture(scope="module")
+def run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, subprocess.CompletedProcess]:
+    """The panel, the state directory and the finished ``dsfd run``."""
+    tmp_path = tmp_path_factory.mktemp("summary")
     panel = write_panel(tmp_path / "panel.yaml", devices=False)
     state = tmp_path / "state"
-    out_json = tmp_path / "summary.json"
     done = subprocess.run(dsfd_command(
         "run", "--config", str(panel), "--dry-run", "--plant", "sim", "--plant-fidelity",
         "lumped", "--start", MORNING_ISO, "--cycles", str(CYCLES), "--state-dir", str(state),
-        "--summary-json", str(out_json)), cwd=ROOT, capture_output=True, text=True,
-        timeout=300, check=False)
+        "--summary-json", str(tmp_path / "summary.json")), cwd=ROOT, capture_output=True,
+        text=True, timeout=300, check=False)
     assert done.returncode == 0, done.stderr
-    summary = json.loads(out_json.read_text())
+    return panel, state, done
+
+
+def test_summary_reports_regimes_louver_heat_and_calibration(run) -> None:
+    _, state, done = run
+    summary = json.loads((state.parent / "summary.json").read_text())
     db = state / "timeseries.sqlite"
     decisions = query(db, "SELECT afr, phi_deg, heating FROM decisions ORDER BY cycle")
     assert summary["cycles"] == len(decisions) == CYCLES
@@ -83,3 +99,44 @@ def test_summary_reports_regimes_louver_heat_and_calibration(tmp_path: Path) -> 
     assert set(heat) == {"q_cv_rd", "q_sol_trans", "q_air", "q_da"}
     assert heat["q_sol_trans"] > 0
     assert "heat into the room:" in text
+
+
+def test_a_parameter_finding_on_the_stored_run_gets_the_energy_at_stake(run, tmp_path) -> None:
+    """The daemon's stake of a path-resistance finding over its own stored run equals the
+    stake computed from what ``dsfd export`` writes of the same cycles (another reader of
+    the database, through a CSV), with θ taken from the parameters table by hand: the prior
+    f before the change, the last on-line f now."""
+    panel_path, state, _ = run
+    cfg = load_panel(panel_path)
+    db = state / "timeseries.sqlite"
+    (t_prior,), = query(db, "SELECT time_s FROM parameters WHERE source = 'prior'")
+    t_online, = query(db, "SELECT MIN(time_s) FROM parameters WHERE source = 'online'")[0]
+    (now_s,), = query(db, "SELECT MAX(time_s) FROM decisions")
+    ev = Evidence(signal="parameter:f", shift=1.0, shift_sd=5.0, unit="ln", since_s=t_online,
+                  statistic=6.0, threshold=5.0)
+    f = Finding(kind="parameter_shift", confidence=0.6, start_s=t_online, detected_s=now_s,
+                evidence=(ev,), action="the calibrated f has risen")
+    with sqlite3.connect(db) as conn:
+        costed = with_stake(conn, f, now_s, panel=cfg, state_dir=state)
+    assert costed.evidence[:1] == (ev,) and len(costed.evidence) == 2
+    stake = costed.evidence[1]
+    assert stake.signal == "energy_at_stake" and stake.unit == "kWh/week"
+    assert "kWh a week" in costed.action and costed.action.startswith(f.action)
+    # the same by another path
+    out = tmp_path / "export.csv"
+    done = subprocess.run(dsfd_command("export", "--state-dir", str(state), "--out", str(out)),
+                          cwd=ROOT, capture_output=True, text=True, timeout=120, check=False)
+    assert done.returncode == 0, done.stderr
+    steps = step_data(cfg, read_measured(out))
+    names = ", ".join(n for n in FIT_NAMES if not n.startswith("q_"))
+    (*now_theta, other), = query(db, f"SELECT {names}, other FROM parameters "
+                                     "ORDER BY time_s DESC LIMIT 1")
+    q = json.loads(other)
+    theta_now = np.array([*now_theta, *(q[n] for n in FIT_NAMES if n.startswith("q_"))])
+    (f_prior,), = query(db, "SELECT f FROM parameters WHERE time_s = ?", t_prior)
+    theta_before = theta_now.copy()
+    theta_before[FIT_NAMES.index("f")] = f_prior
+    assert theta_before[FIT_NAMES.index("f")] != theta_now[FIT_NAMES.index("f")]
+    ref = energy_at_stake(LumpedModel(model_config(cfg, steps.step_s)), steps, theta_before,
+                          theta_now)
+    assert stake.shift == pytest.approx(ref.per_week_kwh, rel=1e-6, abs=1e-9)

@@ -1,0 +1,90 @@
+"""The energy at stake of a parameter finding, from what the daemon stored
+(docs/model.md#energy-at-stake).
+
+A ``parameter_shift`` finding says that one calibrated parameter moved; this adds what the
+move costs: :func:`dsfd.control.stake.energy_at_stake` over the last :data:`STAKE_WINDOW_S`
+of stored cycles (the weather readings and the commands applied, read as ``dsfd export``
+reads them), with θ now against θ now with that one parameter at its value before the
+change. The result joins the finding as one more piece of evidence (signal
+``energy_at_stake``, kWh per week) and a sentence of its action.
+
+Runs in the findings thread (a week of one-minute cycles: about 1 s to read, 6 s of CPU to
+simulate twice), only when the parameter detector reports a finding.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import sqlite3
+from pathlib import Path
+
+import numpy as np
+
+from dsfd.config.panel import PanelConfig
+from dsfd.control.stake import EnergyAtStake, energy_at_stake
+from dsfd.estimation.diagnostics import Evidence, Finding
+from dsfd.estimation.params import FIT_NAMES
+from dsfd.estimation.stepdata import model_config, step_data
+from dsfd.measured import MeasuredDataError
+from dsfd.physics.model import LumpedModel
+from dsfd.storage.history import HistoryError, measured_from_history, read_history
+
+__all__ = ["STAKE_SIGNAL", "STAKE_WINDOW_S", "theta_at", "with_stake"]
+
+#: The record the stake is costed over: the last week, as the issue asks.
+STAKE_WINDOW_S = 7 * 86400.0
+STAKE_SIGNAL = "energy_at_stake"
+
+
+def theta_at(conn: sqlite3.Connection, time_s: float, *, before: bool = False
+             ) -> np.ndarray | None:
+    """The fit vector (θ and the heat-flux offsets, :data:`FIT_NAMES` order) of the last
+    ``parameters`` row at or before ``time_s`` (strictly before it if ``before``: what held
+    when a change began); None if there is none or it is incomplete."""
+    names = [n for n in FIT_NAMES if not n.startswith("q_")]
+    row = conn.execute(f"SELECT {', '.join(names)}, other FROM parameters WHERE time_s "
+                       f"{'<' if before else '<='} ? ORDER BY time_s DESC LIMIT 1",
+                       (time_s,)).fetchone()
+    if row is None or any(v is None for v in row[:-1]):
+        return None
+    other = json.loads(row[-1] or "{}")
+    values = dict(zip(names, row[:-1], strict=True))
+    return np.array([float(values.get(n, other.get(n, 0.0))) for n in FIT_NAMES])
+
+
+def _stake(conn: sqlite3.Connection, f: Finding, now_s: float, panel: PanelConfig,
+           state_dir: Path) -> EnergyAtStake | None:
+    name = f.evidence[0].signal.removeprefix("parameter:")
+    now, before = theta_at(conn, now_s), theta_at(conn, f.start_s, before=True)
+    if now is None or before is None or name not in FIT_NAMES:
+        return None
+    changed = now.copy()
+    i = FIT_NAMES.index(name)
+    changed[i] = before[i]  # only this parameter's move is costed
+    try:
+        data = measured_from_history(read_history(state_dir, since_s=now_s - STAKE_WINDOW_S,
+                                                  until_s=now_s))
+        steps = step_data(panel, data)
+    except (HistoryError, MeasuredDataError, ValueError):
+        return None
+    if steps.n_steps < 2:
+        return None
+    return energy_at_stake(LumpedModel(model_config(panel, steps.step_s)), steps, changed, now)
+
+
+def with_stake(conn: sqlite3.Connection, f: Finding, now_s: float, *, panel: PanelConfig,
+               state_dir: Path) -> Finding:
+    """``f`` (a ``parameter_shift``) with its energy at stake added, or unchanged when the
+    stored record cannot say (no parameters before the change, no usable week)."""
+    s = _stake(conn, f, now_s, panel, state_dir)
+    if s is None or not math.isfinite(s.per_week_kwh):
+        return f
+    ev = Evidence(signal=STAKE_SIGNAL, shift=s.per_week_kwh, shift_sd=math.nan,
+                  unit="kWh/week", since_s=now_s - s.days * 86400.0, statistic=math.nan,
+                  threshold=math.nan)
+    verb = "costs" if s.per_week_kwh >= 0 else "saves"
+    note = (f"; over the last {s.days:.1f} days' weather and commands the change {verb} about "
+            f"{abs(s.per_week_kwh):.2f} kWh a week (the model's J, Eq. 4/5)")
+    return dataclasses.replace(f, evidence=(*f.evidence, ev), action=f.action + note)
