@@ -22,6 +22,7 @@ from dsfd.report.plotting import ReportFigure, figure_html, png
 from dsfd.storage.evidence import NIGHT_MIN_S, RESIDUAL_MIN_S
 from dsfd.storage.findings import findings_between
 from dsfd.storage.history import History
+from dsfd.storage.parameter_series import PARAMETER_MIN_DAYS
 from dsfd.storage.queries import open_read_only
 
 __all__ = ["MAX_FIGURES", "Diagnostics", "build_diagnostics", "render_section"]
@@ -60,7 +61,8 @@ def _none_line(history: History) -> str:
     return (f"No findings in this period. The cavity cross-check judges a damper set once it "
             f"has {FlowCheckSettings().min_samples} readings in the last day; the prediction-"
             f"error CUSUM needs {RESIDUAL_MIN_S / 86400:g} days of stored history, the night "
-            f"pane check {NIGHT_MIN_S / 86400:g} days (this log spans {_span(span)}).")
+            f"pane check {NIGHT_MIN_S / 86400:g} days, the parameter detector "
+            f"{PARAMETER_MIN_DAYS} days of on-line estimates (this log spans {_span(span)}).")
 
 
 def _priority(row: Mapping[str, Any]) -> tuple[int, float]:
@@ -115,12 +117,18 @@ def _caption(row: Mapping[str, Any]) -> str:
                 + ("with the bounds a pane between the sky and the room keeps to."
                    if kind == "pane_out_of_bounds" else
                    "with the median of the nights before the start it is judged against."))
+    elif kind == "parameter_shift":
+        what = ("Each on-line estimate of the parameter and the daily values the detector "
+                "judges (the precision-weighted mean of the day's estimates) ± the posterior "
+                "sd stored with them, against the level of the days before the start; an "
+                "energy at stake in the evidence is the model's J over the last week with the "
+                "parameter before and now.")
     else:
         what = ("Each reading of the cavity speed with the dampers the command in force "
                 "during that step opened (the day the latest check judged), and the commanded "
-                "regime and opening; an open path must move more air than the threshold. A "
-                "cross-check's start is the first reading of a dead path in the window it "
-                "judged, which can precede the fault.")
+                "regime and opening; an open path must move more air than the threshold, "
+                "judged on its latest 20 readings. A cross-check's start is the first of the "
+                "readings of a dead path it judged, which can precede the fault.")
     return f"{what} Marked: the finding's start and detection as stored."
 
 

@@ -11,6 +11,7 @@ the report; marked: the finding's start and detection (and its end), as stored.
 
 from __future__ import annotations
 
+import dataclasses
 import sqlite3
 from collections.abc import Callable, Mapping
 from typing import Any
@@ -20,6 +21,7 @@ from matplotlib.axes import Axes
 from matplotlib.dates import AutoDateLocator, ConciseDateFormatter
 from matplotlib.figure import Figure
 
+from dsfd.config.panel import Parameters
 from dsfd.estimation.crosschecks import FlowCheckSettings, NightCheckSettings, nightly_offsets
 from dsfd.estimation.diagnostics import ResidualSettings, page_cusum, residual_blocks
 from dsfd.report.kpis import zone_name
@@ -33,9 +35,10 @@ from dsfd.storage.evidence import (
     night_series,
     residual_series,
 )
+from dsfd.storage.parameter_series import PARAMETER_MIN_DAYS, parameter_series, parameter_unit
 
 __all__ = ["FLOW_KINDS", "NIGHT_KINDS", "NoEvidence", "evidence_figure", "flow_figure",
-           "night_figure", "residual_figure"]
+           "night_figure", "parameter_figure", "residual_figure"]
 
 FLOW_KINDS = ("damper_no_flow", "cavity_no_flow", "cavity_flow_when_closed")
 NIGHT_KINDS = ("pane_out_of_bounds", "pane_offset_shift")
@@ -253,15 +256,65 @@ def night_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h: flo
     return fig
 
 
+def parameter_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h: float
+                     ) -> Figure:
+    """A calibrated parameter's on-line estimates and the daily values the detector judged,
+    each ± its posterior sd, with the level of the days before the start."""
+    name = _signal(row)
+    end = _end_s(row)
+    series = parameter_series(conn, end)
+    if series is None or name not in series or not series[name][0].size:
+        raise NoEvidence(f"fewer than {PARAMETER_MIN_DAYS} days of {name or '?'} estimates "
+                         "with their posterior sd before the last check")
+    t_day, z_day, sd_day = series[name]
+    linear = parameter_unit(name) == ""
+
+    def physical(z: np.ndarray) -> np.ndarray:  # the detector's coordinate → θ
+        return z if linear else np.exp(z)
+
+    ax_t = _Axes(offset_h, float(t_day[0]) - 86400.0, end)
+    raw = np.array(conn.execute(
+        f"SELECT time_s, {name} FROM parameters WHERE source = 'online' AND time_s >= ? AND "
+        "time_s <= ? ORDER BY time_s", (ax_t.lo_s, end)).fetchall(), float).reshape(-1, 2)
+    fig = Figure(figsize=(WIDTH_IN, 4.2), layout="constrained")
+    ax = fig.subplots()
+    fig.suptitle(f"#{row['finding_id']} parameter_shift: the calibrated {name}, day by day",
+                 fontsize=12, x=0.01, ha="left")
+    ax.plot(ax_t.local(raw[:, 0]), raw[:, 1], ".", ms=1.5, color="#aaaaaa",
+            label="each on-line estimate")
+    mid = t_day - 43200.0  # a day's value is complete at its last estimate: drawn mid-day
+    centre = physical(z_day)
+    ax.errorbar(ax_t.local(mid), centre, yerr=[centre - physical(z_day - sd_day),
+                                               physical(z_day + sd_day) - centre],
+                fmt="o", ms=4, capsize=3, color="#1f77b4",
+                label="daily value ± posterior sd (the detector's input)")
+    before = t_day < float(row["start_s"])
+    if before.any():
+        w = 1.0 / sd_day[before] ** 2
+        level = float(physical(np.sum(w * z_day[before]) / np.sum(w)))
+        ax.plot(ax_t.local(np.array([mid[before][0], float(row["start_s"])])),
+                [level, level], color="black", ls="--", lw=1.1,
+                label="precision-weighted level of the days before the start")
+    unit = {f.name: f.metadata.get("unit") for f in dataclasses.fields(Parameters)}.get(name)
+    ax.set_ylabel(f"{name}\n[{'-' if unit in (None, '1') else unit}]")
+    if not linear:
+        ax.set_yscale("log")  # the sd is relative: equal bars for equal evidence
+    ax_t.marks(ax, row, legend=True)
+    ax.legend(**OUTSIDE)
+    ax_t.setup(ax, label=True)
+    return fig
+
+
 def evidence_figure(conn: sqlite3.Connection, row: Mapping[str, Any], *, offset_h: float,
                     config: Mapping[str, Any] | None) -> Figure | str:
     """The figure of one stored finding (a row of :func:`dsfd.storage.findings.
-    findings_between`), or why there is none (a kind with no figure, e.g.
-    ``parameter_shift``, or no rows to draw it from)."""
+    findings_between`), or why there is none (a kind with no figure, or no rows to draw it
+    from)."""
     draw: dict[str, Callable[[], Figure]] = {
         "residual_shift": lambda: residual_figure(conn, row, offset_h),
         **{k: (lambda: flow_figure(conn, row, offset_h)) for k in FLOW_KINDS},
-        **{k: (lambda: night_figure(conn, row, offset_h, config)) for k in NIGHT_KINDS}}
+        **{k: (lambda: night_figure(conn, row, offset_h, config)) for k in NIGHT_KINDS},
+        "parameter_shift": lambda: parameter_figure(conn, row, offset_h)}
     f = draw.get(str(row["kind"]))
     if f is None:
         return f"no figure for a {row['kind']} finding"

@@ -179,3 +179,36 @@ def test_at_most_a_few_figures_open_findings_first_the_rest_listed(residual_stat
         == 3
     assert "#10: no figure: no stored cavity speed readings" in html
     assert "#11" not in html  # ended before the period
+
+
+def test_a_parameter_finding_is_drawn_with_its_daily_values_and_the_level_before(tmp_path):
+    """The path resistance doubled from the 15th day (tests/daemon/test_parameter_findings):
+    the figure's daily values after the start sit about twice the drawn level before it,
+    the level within the days' wander of the synthetic truth (f = 100), and its marks are
+    the stored start and detection."""
+    from dsfd.report.finding_figures import parameter_figure
+    from tests.daemon.test_parameter_findings import (
+        DEFAULTS,
+        SHIFT_AT,
+        _checks,
+        _parameter_history,
+    )
+
+    db = _parameter_history(tmp_path, shift={"f": float(np.log(2.0))})
+    _checks(db)
+    with sqlite3.connect(db) as conn:
+        rows = [r for r in findings_between(conn, 0.0, 1e12) if r["kind"] == "parameter_shift"]
+        assert [r["subject"] for r in rows] == ["parameter:f"]
+        fig = parameter_figure(conn, rows[0], 0.0)
+    ax = fig.axes[0]
+    assert ax.get_yscale() == "log" and "f" in ax.get_ylabel()
+    lines = _lines(fig, 0.0)
+    (x0, x1), (level, _) = lines["precision-weighted level of the days before the start"]
+    assert 0.8 * DEFAULTS["f"] < level < 1.25 * DEFAULTS["f"]
+    daily = next(c for c in ax.containers).lines[0]  # the error bars' points
+    t = np.asarray(daily.get_xdata()).astype("datetime64[ms]").astype("int64") / 1e3
+    after = np.asarray(daily.get_ydata(), float)[t > SHIFT_AT + 86400.0]
+    assert after.size >= 3 and np.all((after > 1.5 * level) & (after < 2.6 * level))
+    marks = {ln.get_label(): ln.get_xdata()[0] for ln in ax.get_lines()
+             if ln.get_label() in ("start", "detected")}
+    assert set(marks) == {"start", "detected"}
