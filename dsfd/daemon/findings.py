@@ -102,7 +102,8 @@ def _flow_finding(conn: sqlite3.Connection, now_s: float) -> Finding | None:
     s = flow_series(conn, now_s - CROSSCHECK_WINDOW_S, now_s)
     if not s.time_s.size:
         return None
-    return cavity_flow_check(s.time_s, s.v_cav_ms, s.opened, s.drive_k)
+    return cavity_flow_check(s.time_s, s.v_cav_ms, s.opened, s.drive_k,
+                             expected_ms=s.expected_ms)
 
 
 def _residual_findings(conn: sqlite3.Connection, now_s: float) -> list[Finding]:

@@ -51,16 +51,26 @@ class FlowCheckSettings:
         damper stuck shut 0.000–0.011 m/s.
     closed_max_ms : float, [m/s]
         A closed cavity whose median speed is above this moves air it should not (0.15 m/s).
+    min_expected_ms : float, [m/s]
+        Where the model's one-step prediction is given, an open path is judged only on
+        readings it expected to be at least this fast (0.04 m/s, twice the contrast): a
+        path whose flow the physics itself says is weak cannot be told from a dead one by
+        an anemometer with 0.02 m/s of noise. A winter supply path (EB → IT) often runs
+        against the room's stack at 0.01 m/s, healthy, and was then called dead; with one
+        of its dampers stuck shut, the model expected 0.05-0.09 m/s where 0.00-0.015 m/s
+        was read (bench diagnostics, winter seed 1).
     """
 
     min_samples: int = 20
     min_drive_k: float = 3.0
     min_contrast_ms: float = 0.02
     closed_max_ms: float = 0.15
+    min_expected_ms: float = 0.04
 
 
 def cavity_flow_check(times_s: np.ndarray, v_cav_ms: np.ndarray,
                       commanded_open: Sequence[frozenset[str]], drive_k: np.ndarray, *,
+                      expected_ms: np.ndarray | None = None,
                       settings: FlowCheckSettings | None = None) -> Finding | None:
     """Does the cavity air move as the commanded dampers say it must?
 
@@ -73,6 +83,9 @@ def cavity_flow_check(times_s: np.ndarray, v_cav_ms: np.ndarray,
         The dampers commanded open at each reading (e.g. ``{"EB", "ET"}``; empty: closed).
     drive_k : array (n,), [K]
         Driving temperature difference of each reading, e.g. |cavity air − outdoor air|.
+    expected_ms : array (n,), optional, [m/s]
+        The calibrated model's one-step prediction of each reading (NaN: none; then the
+        drive alone decides whether an open path's reading is judged).
 
     Returns
     -------
@@ -86,6 +99,8 @@ def cavity_flow_check(times_s: np.ndarray, v_cav_ms: np.ndarray,
     t = np.asarray(times_s, float)
     v = np.asarray(v_cav_ms, float)
     drive = np.asarray(drive_k, float)
+    expected = np.full(v.shape, np.nan) if expected_ms is None else np.asarray(expected_ms,
+                                                                             float)
     sets = [frozenset(s) for s in commanded_open]
     closed = _latest(np.array([not s for s in sets]) & np.isfinite(v), st.min_samples)
     base = 0.0
@@ -104,7 +119,8 @@ def cavity_flow_check(times_s: np.ndarray, v_cav_ms: np.ndarray,
     live, dead = [], []
     for s in sorted({s for s in sets if s}, key=sorted):
         sel = _latest(np.array([x == s for x in sets]) & np.isfinite(v)
-                      & (drive >= st.min_drive_k), st.min_samples)
+                      & (drive >= st.min_drive_k) & ~(expected < st.min_expected_ms),
+                      st.min_samples)
         if np.count_nonzero(sel) >= st.min_samples:
             (live if np.median(v[sel]) >= need else dead).append((s, sel))
     if not dead:

@@ -171,7 +171,8 @@ def flow_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h: floa
         sel = np.array([o == p for o in s.opened])
         name = "+".join(sorted(p)) if p else "all shut"
         colour = "#7f7f7f" if not p else _PATH_COLOURS[i % len(_PATH_COLOURS)]
-        judged = sel if not p else sel & (s.drive_k >= st.min_drive_k)
+        judged = sel if not p else sel & (s.drive_k >= st.min_drive_k) & ~(
+            s.expected_ms < st.min_expected_ms)
         speed.plot(t[judged], s.v_cav_ms[judged], "o", ms=3, color=colour,
                    label=f"{name} open" if p else name)
         if (sel & ~judged).any():
@@ -187,7 +188,8 @@ def flow_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h: floa
                           else " (an open path must move more)"))
     if hollow:
         speed.plot([], [], "o", ms=3, mfc="none", color="#555555",
-                   label=f"hollow: driving difference < {st.min_drive_k:g} K (not judged)")
+                   label=f"hollow: not judged (driving difference < {st.min_drive_k:g} K, "
+                   f"or the model expected < {st.min_expected_ms:g} m/s)")
     speed.set_ylabel("cavity air speed\n[m/s]")
     speed.set_ylim(bottom=0)
     ax_t.marks(speed, row, legend=True)

@@ -94,14 +94,16 @@ class FlowSeries:
     #: The commanded regime (1-10) and damper opening [%] in force.
     afr: np.ndarray
     or_pct: np.ndarray
+    #: The model's one-step prediction of the reading [m/s] (NaN where none is stored).
+    expected_ms: np.ndarray
 
 
 def flow_series(conn: sqlite3.Connection, since_s: float, until_s: float) -> FlowSeries:
     """Each reading against the command in force during the step that ended at it (the
     previous cycle's applied position, same run)."""
     cycles, values = read_rows(conn, since_s, until_s, _FLOW_SIGNALS,
-                               ("applied_afr", "applied_or_pct"))
-    t, v, opened, drive, afr, or_pct = [], [], [], [], [], []
+                               ("applied_afr", "applied_or_pct", "pred_v_cav_ms"))
+    t, v, opened, drive, afr, or_pct, expected = [], [], [], [], [], [], []
     for (run0, c0, _), (run, cycle, time_s) in itertools.pairwise(cycles):
         before, now = values.get((run0, c0), {}), values.get((run, cycle), {})
         if run0 != run or c0 != cycle - 1 or "applied_afr" not in before \
@@ -117,8 +119,11 @@ def flow_series(conn: sqlite3.Connection, since_s: float, until_s: float) -> Flo
                          abs(now["x5_c"] - now.get("t_out_c", np.nan))))
         afr.append(regime)
         or_pct.append(opening)
+        # the row's prediction is of this reading, made with the command in force
+        expected.append(now.get("pred_v_cav_ms", np.nan))
     return FlowSeries(np.array(t, float), np.array(v, float), opened, np.array(drive, float),
-                      np.array(afr, float), np.array(or_pct, float))
+                      np.array(afr, float), np.array(or_pct, float),
+                      np.array(expected, float))
 
 
 def residual_series(conn: sqlite3.Connection, since_s: float, until_s: float,

@@ -60,6 +60,21 @@ def test_a_damper_that_sticks_after_its_path_flowed_is_found_on_the_recent_readi
         assert (f is not None) == found, dead
 
 
+def test_a_path_the_model_expects_to_be_weak_is_not_judged_one_it_expects_to_flow_is():
+    """A supply path against the room's stack: 0.01 m/s read, the model expecting about
+    that, is healthy; the same readings where the model expected 0.06 m/s are a dead path."""
+    t, v, sets, drive = _flow_day({CLOSED: 0.0, EXT: 0.01, INT: 0.20}, seed=3)
+    ext = np.array([s == EXT for s in sets])
+    weak = np.where(ext, 0.012, 0.2)
+    assert cavity_flow_check(t, v, sets, drive, expected_ms=weak) is None
+    f = cavity_flow_check(t, v, sets, drive, expected_ms=np.where(ext, 0.06, 0.2))
+    assert f is not None and f.kind == "damper_no_flow"
+    # no prediction stored (NaN): the drive alone decides, as before
+    nan = np.full(v.size, np.nan)
+    assert cavity_flow_check(t, v, sets, drive, expected_ms=nan) == \
+        cavity_flow_check(t, v, sets, drive)
+
+
 def test_a_healthy_cavity_gives_nothing():
     t, v, sets, drive = _flow_day({CLOSED: 0.02, EXT: 0.25, INT: 0.20, DIAG: 0.15})
     assert cavity_flow_check(t, v, sets, drive) is None

@@ -203,7 +203,7 @@ def test_a_parameter_finding_is_drawn_with_its_daily_values_and_the_level_before
     ax = fig.axes[0]
     assert ax.get_yscale() == "log" and "f" in ax.get_ylabel()
     lines = _lines(fig, 0.0)
-    (x0, x1), (level, _) = lines["precision-weighted level of the days before the start"]
+    _, (level, _) = lines["precision-weighted level of the days before the start"]
     assert 0.8 * DEFAULTS["f"] < level < 1.25 * DEFAULTS["f"]
     daily = next(c for c in ax.containers).lines[0]  # the error bars' points
     t = np.asarray(daily.get_xdata()).astype("datetime64[ms]").astype("int64") / 1e3
