@@ -33,15 +33,17 @@ class FlowCheckSettings:
     ----------
     min_samples : int
         Each damper set (and the closed cavity) is judged on its latest ``min_samples``
-        readings (with drive, for an open path), and not before it has that many (20): a
-        path is judged on what it does now, so a damper that sticks after its path flowed
-        all morning is seen once about half of them are dead, not half of the day's. At the
-        anemometer's noise (0.02 m/s sd) the median of 20 readings has a standard error of
-        about 0.006 m/s (1.25 σ/√n for the median of normal data), a third of the contrast
-        below.
+        readings (that it had to move air at, for an open path), and not before it has that
+        many (15): a path is judged on what it does now, so a damper that sticks after its
+        path flowed all morning is seen once about half of them are dead, not half of the
+        day's. At the anemometer's noise (0.02 m/s sd) the median of 15 readings has a
+        standard error of about 0.0065 m/s (1.25 σ/√n for the median of normal data), a
+        third of the contrast below. 15 rather than 20: in cooling weather a stuck IT's
+        interior loop had 19 readings in half a day that the model expected to flow.
     min_drive_k : float, [K]
-        An open path is judged only on readings with at least this driving temperature
-        difference (3 K: a stack of a few kelvin moves ~0.1 m/s through the paper's façade).
+        Without the model's expectation, an open path is judged only on readings with at
+        least this driving temperature difference (3 K: a stack of a few kelvin moves
+        ~0.1 m/s through the paper's façade).
     min_contrast_ms : float, [m/s]
         An open path "moves air" when its median speed exceeds the closed cavity's median
         (0 when the cavity was not closed) by this much (0.02 m/s). An unsigned anemometer
@@ -52,16 +54,20 @@ class FlowCheckSettings:
     closed_max_ms : float, [m/s]
         A closed cavity whose median speed is above this moves air it should not (0.15 m/s).
     min_expected_ms : float, [m/s]
-        Where the model's one-step prediction is given, an open path is judged only on
-        readings it expected to be at least this fast (0.04 m/s, twice the contrast): a
-        path whose flow the physics itself says is weak cannot be told from a dead one by
-        an anemometer with 0.02 m/s of noise. A winter supply path (EB → IT) often runs
-        against the room's stack at 0.01 m/s, healthy, and was then called dead; with one
-        of its dampers stuck shut, the model expected 0.05-0.09 m/s where 0.00-0.015 m/s
-        was read (bench diagnostics, winter seed 1).
+        Where the model's one-step prediction is given, an open path is judged on the
+        readings it expected to be at least this fast (0.04 m/s, twice the contrast), and
+        the drive is not asked: the calibrated model knows the path's physics (stack,
+        wind, which way the room pulls) better than a temperature difference does. A path
+        whose flow the model itself says is weak cannot be told from a dead one by an
+        anemometer with 0.02 m/s of noise: a winter supply path (EB → IT) often runs
+        against the room's stack at 0.01 m/s, healthy, and was called dead on the drive
+        alone; with IT stuck shut the model expected 0.05-0.09 m/s where 0.00-0.015 m/s
+        was read (bench diagnostics, winter seed 1). In cooling weather the same stuck
+        damper's paths mostly had less than 3 K of drive while the model expected
+        0.17 m/s through them.
     """
 
-    min_samples: int = 20
+    min_samples: int = 15
     min_drive_k: float = 3.0
     min_contrast_ms: float = 0.02
     closed_max_ms: float = 0.15
@@ -116,10 +122,12 @@ def cavity_flow_check(times_s: np.ndarray, v_cav_ms: np.ndarray,
                     f"the cavity air moves at {base:.2f} m/s with every damper commanded "
                     "shut: check for a damper stuck open, or the anemometer"))
     need = base + st.min_contrast_ms
+    # readings an open path must move air at: what the model expected, else the drive
+    should_move = np.where(np.isfinite(expected), expected >= st.min_expected_ms,
+                           drive >= st.min_drive_k)
     live, dead = [], []
     for s in sorted({s for s in sets if s}, key=sorted):
-        sel = _latest(np.array([x == s for x in sets]) & np.isfinite(v)
-                      & (drive >= st.min_drive_k) & ~(expected < st.min_expected_ms),
+        sel = _latest(np.array([x == s for x in sets]) & np.isfinite(v) & should_move,
                       st.min_samples)
         if np.count_nonzero(sel) >= st.min_samples:
             (live if np.median(v[sel]) >= need else dead).append((s, sel))

@@ -127,7 +127,7 @@ def _caption(row: Mapping[str, Any]) -> str:
         what = ("Each reading of the cavity speed with the dampers the command in force "
                 "during that step opened (the day the latest check judged), and the commanded "
                 "regime and opening; an open path must move more air than the threshold, "
-                "judged on its latest 20 readings. A cross-check's start is the first of the "
+                "judged on its latest 15 readings. A cross-check's start is the first of the "
                 "readings of a dead path it judged, which can precede the fault.")
     return f"{what} Marked: the finding's start and detection as stored."
 

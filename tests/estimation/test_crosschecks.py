@@ -34,9 +34,9 @@ def test_a_damper_that_no_flowing_path_uses_is_named():
     ev, = f.evidence
     assert ev.signal == "crosscheck:v_cav_ms[EB+ET]" and ev.unit == "m/s"
     assert ev.statistic < ev.threshold
-    # judged on the path's latest 20 readings: the evidence starts at the first of them
+    # judged on the path's latest 15 readings: the evidence starts at the first of them
     last_ext = max(i for i, x in enumerate(sets) if x == EXT)
-    assert ev.since_s == t[last_ext - 19]
+    assert ev.since_s == t[last_ext - 14]
     assert f.confidence > 0.9
 
 
@@ -53,8 +53,8 @@ def test_a_damper_that_sticks_after_its_path_flowed_is_found_on_the_recent_readi
     f = cavity_flow_check(t, v, sets, drive)
     assert f is not None and f.kind == "damper_no_flow" and "check damper" in f.action
     assert set(f.subject.split("+")) <= {"EB", "ET"}  # no flowing path uses them
-    # the median of the latest 20 turns once 11 of them are dead: 10 are not enough
-    for dead, found in ((10, False), (11, True)):
+    # the median of the latest 15 turns once 8 of them are dead: 7 are not enough
+    for dead, found in ((7, False), (8, True)):
         end = len(sets) - 15 + dead
         f = cavity_flow_check(t[:end], v[:end], sets[:end], drive[:end])
         assert (f is not None) == found, dead
