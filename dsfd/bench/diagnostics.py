@@ -33,12 +33,13 @@ from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 import yaml
 
 from dsfd.config.panel import REGIME_OPENINGS
 
 __all__ = ["NAMES", "PREFIX_DAYS", "SEASONS", "Scenario", "aalborg_findings",
-           "bench_diagnostics", "report", "scenarios", "score"]
+           "bench_diagnostics", "recheck", "report", "scenarios", "score"]
 
 SECONDS_PER_DAY = 86400.0
 #: Clean days before a fault that one of the history-hungry detectors must find.
@@ -256,6 +257,7 @@ def _run(config: Path, scenario: Scenario, *, seed: int, weather: str | None, st
 def bench_diagnostics(config: Path, *, seeds: Sequence[int], seasons: Sequence[str] = SEASONS,
                       names: Iterable[str] | None = None, clean_days: float = 10.0,
                       keep: Path | None = None, aalborg: Path | None = None,
+                      rechecked: Path | None = None,
                       aalborg_panel: Path | None = None,
                       progress: Callable[[str], None] | None = None,
                       on_figures: Callable[[dict[str, float | str]], None] | None = None
@@ -263,6 +265,8 @@ def bench_diagnostics(config: Path, *, seeds: Sequence[int], seasons: Sequence[s
     """Run the scenarios (:func:`scenarios`, those in ``names``) for every season and seed,
     one after another; flat figures ``<season>.<scenario>.seed<N>.<figure>``, handed to
     ``on_figures`` after each run. ``keep``: keep each run's state directory there.
+    ``rechecked``: instead of running, score the runs an earlier ``keep`` left there again
+    with today's detectors (:func:`recheck`; runs it does not hold are skipped).
     ``aalborg``: the Aalborg "Cube" source folder, scored first (:func:`aalborg_findings`,
     with ``aalborg_panel``, by default ``aalborg-cube.yaml`` beside ``config``)."""
     unknown = sorted(set(seasons) - set(SEASONS))
@@ -295,15 +299,60 @@ def bench_diagnostics(config: Path, *, seeds: Sequence[int], seasons: Sequence[s
             for seed in seeds:
                 for scenario in plan:
                     key = f"{season}.{scenario.name}.seed{seed}"
-                    if progress:
-                        progress(f"{key}: {scenario.days:g} simulated days, fault "
-                                 f"{scenario.fault or 'none'}")
-                    db = _run(panel, scenario, seed=seed, weather=weather,
-                              state=root / key)
-                    figures.update({f"{key}.{k}": v for k, v in score(db, scenario).items()})
+                    if rechecked is not None:
+                        if not (rechecked / key / "timeseries.sqlite").exists():
+                            continue  # not kept: that run was not made
+                        if progress:
+                            progress(f"{key}: replaying the detectors over {rechecked / key}")
+                        fig = recheck(rechecked / key, scenario, panel, root / key)
+                    else:
+                        if progress:
+                            progress(f"{key}: {scenario.days:g} simulated days, fault "
+                                     f"{scenario.fault or 'none'}")
+                        fig = score(_run(panel, scenario, seed=seed, weather=weather,
+                                         state=root / key), scenario)
+                    figures.update({f"{key}.{k}": v for k, v in fig.items()})
                     if on_figures:
                         on_figures(dict(figures))
     return figures
+
+
+def recheck(state: Path, scenario: Scenario, panel: Path, work: Path
+            ) -> dict[str, float | str]:
+    """Score a kept run again with today's detectors: its database is copied (SQLite's
+    backup, migrated to the current schema), its findings dropped, and the daemon's checks
+    replayed over the stored rows every :data:`~dsfd.daemon.findings.CHECK_EVERY_S`. The
+    detectors never act on the façade, so a replay sees what the running daemon would have
+    seen; the costly part of the bench, the runs, need not be repeated to try a detector."""
+    from dsfd.config import load_panel
+    from dsfd.daemon.findings import CHECK_EVERY_S, FindingsStage, NightSite
+    from dsfd.storage.schema import connect_checked
+
+    cfg = load_panel(panel)
+    work.mkdir(parents=True, exist_ok=True)
+    db = work / "timeseries.sqlite"
+    src = sqlite3.connect(f"file:{state / 'timeseries.sqlite'}?mode=ro", uri=True)
+    dst = sqlite3.connect(db)
+    try:
+        src.backup(dst)
+    finally:
+        src.close()
+        dst.close()
+    connect_checked(db).close()
+    conn = sqlite3.connect(db)
+    try:
+        conn.execute("DELETE FROM findings")
+        conn.commit()
+        t0, t1 = (float(v) for v in conn.execute(
+            "SELECT MIN(time_s), MAX(time_s) FROM decisions").fetchone())
+        stage = FindingsStage(db, run_id=lambda: None, panel=cfg, night=NightSite(
+            latitude_deg=cfg.site.latitude_deg, longitude_deg=cfg.site.longitude_deg,
+            room_c=cfg.room.t_in_c))
+        for now in np.arange(t0 + CHECK_EVERY_S, t1 + 1.0, CHECK_EVERY_S):
+            stage.check(conn, float(now))
+    finally:
+        conn.close()
+    return score(db, scenario)
 
 
 def aalborg_findings(panel: Path, source_dir: Path) -> dict[str, float | str]:

@@ -185,7 +185,7 @@ def _bench_diagnostics(args: argparse.Namespace) -> dict[str, Any]:
             s.strip() for s in args.seasons.split(",") if s.strip()),
         names=None if args.scenarios is None else tuple(
             s.strip() for s in args.scenarios.split(",") if s.strip()),
-        keep=args.keep_state, aalborg=args.aalborg,
+        keep=args.keep_state, aalborg=args.aalborg, rechecked=args.recheck,
         progress=lambda msg: print(msg, file=sys.stderr, flush=True),
         on_figures=None if args.json is None else lambda fig: _write_json(
             args.json, args.target, {**fig, "partial": 1.0}))
@@ -216,7 +216,7 @@ IDENTIFY_SEEDS, IDENTIFY_DAYS = 5, 3.0
 #: Options only ``identify`` takes (``keep_state``: and ``diagnostics``).
 IDENTIFY_ONLY = ("plant", "sensors", "protocol")
 #: Options only ``diagnostics`` takes.
-DIAGNOSTICS_ONLY = ("seasons", "scenarios", "aalborg")
+DIAGNOSTICS_ONLY = ("seasons", "scenarios", "aalborg", "recheck")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -292,6 +292,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--scenarios", default=None, metavar="LIST",
                    help="diagnostics: some of stuck-damper, louver-slip, tc-offset, tc-drift, "
                    "soiling, screen, clean (default all)")
+    p.add_argument("--recheck", type=Path, default=None, metavar="DIR",
+                   help="diagnostics: make no run; replay today's detectors over the runs an "
+                   "earlier --keep-state DIR kept, and score them again")
     p.add_argument("--aalborg", type=Path, default=None, metavar="DIR",
                    help="diagnostics: also count the residual detector's findings on the real "
                    "Aalborg 'Cube' week in DIR (the dsfd convert-aalborg source folder), "

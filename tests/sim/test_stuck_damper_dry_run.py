@@ -192,3 +192,28 @@ def test_dsfd_report_shows_the_stuck_damper_finding_with_a_figure_of_its_evidenc
     threshold = next(v for k, v in paths.items() if k.startswith("threshold"))
     assert threshold.get_ydata()[0] == pytest.approx(row["evidence"][0]["threshold"])
     assert np.asarray(fig.axes[2].get_lines()[0].get_ydata(), float).max() > 0
+
+
+def test_the_bench_replay_of_the_stored_run_finds_what_the_daemon_found(runs, tmp_path):
+    """``dsfd bench diagnostics --recheck`` replays the detectors over a kept run: on the
+    stuck run it opens the damper finding the daemon opened, within one check interval of
+    it, naming IT as the daemon did, and on the clean run it finds nothing."""
+    from dsfd.bench.diagnostics import recheck, scenarios, score
+    from dsfd.daemon.findings import CHECK_EVERY_S
+
+    stuck = next(s for s in scenarios(clean_days=1.0) if s.name == "stuck-damper")
+    assert stuck.fault == "damper-stuck.IT:+30min:0" and stuck.onset_s == ONSET_CYCLE * 60.0
+    db = runs["stuck"]["db"]
+    fig = recheck(db.parent, stuck, db.parent.parent / "panel.yaml", tmp_path / "stuck")
+    assert fig["named"] == 1.0 and fig["false_findings"] == 0.0
+    own_fig = score(db, stuck)  # what the daemon's own checks stored
+    assert own_fig["named"] == 1.0
+    assert abs(fig["name_delay_min"] - own_fig["name_delay_min"]) <= CHECK_EVERY_S / 60.0
+    (own,), = query(db, "SELECT MIN(opened_s) FROM findings WHERE kind = 'damper_no_flow'")
+    (replayed,), = query(tmp_path / "stuck" / "timeseries.sqlite",
+                         "SELECT MIN(opened_s) FROM findings WHERE kind = 'damper_no_flow'")
+    assert abs(replayed - own) <= CHECK_EVERY_S
+    clean = next(s for s in scenarios(clean_days=CYCLES / 1440) if s.name == "clean")
+    c = runs["clean"]["db"]
+    assert recheck(c.parent, clean, c.parent.parent / "panel.yaml",
+                   tmp_path / "clean")["false_findings"] == 0.0
