@@ -23,6 +23,7 @@ import math
 import numpy as np
 import pytest
 
+from dsfd.control.comfort_horizon import direct_sun_bound_wm2
 from dsfd.control.forecast import persistence_forecast
 from dsfd.control.optimiser import ControlProblem, MpcOptimiser
 from dsfd.physics.comfort_visual import cutoff_angles, direct_sun_wm2
@@ -79,12 +80,20 @@ def _measured_direct_sun(mpc, truth, phi_deg: float) -> np.ndarray:
 
 def test_the_station_sees_no_beam_where_the_sun_shines(suwon, dawn):
     """The cause: the forecast's beam on the façade (Erbs on GHI) against the measured one."""
-    _, problem, truth, station = dawn
+    mpc, problem, truth, station = dawn
     assert float(station.ghi_wm2[0]) == pytest.approx(20.0, abs=3.0)
     _, cos_aoi = _sun_on_facade(suwon, truth.time_s)
     measured = np.asarray(truth.dni_wm2) * cos_aoi
     assert np.all(measured > 100.0)
     assert np.all(problem.forcing.beam_wm2[:5] < 0.05 * measured)
+    # What the constraint judges instead: never less than the estimate's direct sun, and
+    # at the energy-only +18° as much as the measured beam gives, or more.
+    phi = np.radians(np.asarray(suwon.louver.angles_deg()))[:, None]
+    judged = direct_sun_bound_wm2(mpc.optics, problem.forcing, phi)
+    estimate = mpc.optics.layers(problem.forcing, phi)[0].transmitted_beam
+    assert np.all(judged >= estimate)
+    plus18 = list(suwon.louver.angles_deg()).index(18.0)
+    assert np.all(judged[plus18, :5] >= _measured_direct_sun(mpc, truth, 18.0))
 
 
 def test_the_comfort_decision_keeps_the_measured_sun_out_while_it_holds(suwon, dawn):
