@@ -3,7 +3,9 @@
 docs/model.md#comfort-constraints. While a horizon step is occupied, a candidate (louver
 position, damper set, opening held over the horizon) is to keep, at every occupied step,
 
-* the solar beam passing the louver unscattered into the room ≤ ``direct_sun_max_wm2``;
+* the solar beam passing the louver unscattered into the room ≤ ``direct_sun_max_wm2``, judged
+  under the largest beam the forecast's GHI allows (:func:`direct_sun_bound_wm2`), not under
+  the decomposition's estimate;
 * the simplified daylight glare probability DGPs at the occupant's eye ≤ ``dgp_max``;
 * the air it blows into the room (x̄5 of its rollout, when cavity air enters the room) ≥ the
   supply-air limit (:func:`dsfd.physics.comfort_thermal.supply_air_min_c`);
@@ -24,8 +26,14 @@ import numpy as np
 
 from dsfd.control.comfort import view_factors
 from dsfd.physics.comfort_thermal import asymmetry_limit_k, radiant_asymmetry_k, supply_air_min_c
-from dsfd.physics.comfort_visual import dgp_simplified, eye_illuminance_lx
+from dsfd.physics.comfort_visual import (
+    dgp_simplified,
+    direct_sun_wm2,
+    dni_bound_wm2,
+    eye_illuminance_lx,
+)
 from dsfd.physics.constants import T_ZERO
+from dsfd.physics.solar import extraterrestrial_irradiance
 
 if TYPE_CHECKING:
     from dsfd.config.panel import PanelConfig
@@ -35,8 +43,8 @@ if TYPE_CHECKING:
 
 __all__ = ["INFLOW_MIN_KGS", "LEAST_VIOLATION", "LIMIT_NAMES", "THERMAL_LIMITS",
            "VIOLATION_BAND", "VISUAL_LIMITS",
-           "HorizonComfort", "acceptable", "block_any", "comfort_note", "equally_violating",
-           "limits_line"]
+           "HorizonComfort", "acceptable", "block_any", "comfort_note", "direct_sun_bound_wm2",
+           "equally_violating", "limits_line"]
 
 #: The limits in the order of the excess columns, as the trace names them.
 LIMIT_NAMES = ("direct sun cut-off", "glare (DGPs)", "draught (supply air)",
@@ -88,6 +96,34 @@ def block_any(mask: np.ndarray, factor: int) -> np.ndarray:
     return np.logical_or.reduceat(mask, np.arange(0, mask.size, factor)) if mask.size else mask
 
 
+def direct_sun_bound_wm2(optics: FacadeOptics, forcing: Forcing,
+                         phi_rad: np.ndarray) -> np.ndarray:
+    """Direct sun [W/m2] of louver angles ``phi_rad`` (broadcast against the steps) under the
+    largest beam the forecast allows (docs/model.md#direct-sun-bound).
+
+    The direct normal irradiance is bounded by the GHI of each step,
+    DNI <= min(I0, GHI / cos Z) (:func:`~dsfd.physics.comfort_visual.dni_bound_wm2`), and the
+    largest bound of the horizon is held over it, as the forecast holds the clearness index
+    (its dawn and dusk branch holds GHI instead, whose bound falls as the sun rises while the
+    true beam grows). The façade beam judged is that bound on the façade plane (zero with the
+    sun below the horizon or behind the façade), never less than the forecast's own estimate
+    (e.g. a beam from façade-plane readings). With the sun's geometry exact, this is the
+    cut-off the louver needs over the whole horizon whatever the decomposition believes:
+    Erbs gives no beam above Z = 87° and too little on a clear winter day
+    (docs/model.md#decomposition), which let the sun through the slats in the closed loop.
+    """
+    dni = np.nan_to_num(dni_bound_wm2(
+        ghi_wm2=forcing.ghi_wm2, zenith_deg=forcing.zenith_deg,
+        dni_extra_wm2=extraterrestrial_irradiance(forcing.time_s)))
+    held = float(dni.max()) if dni.size else 0.0
+    cos_aoi = np.cos(np.radians(np.asarray(forcing.aoi_deg, float)))
+    facing = (np.asarray(forcing.zenith_deg, float) < 90.0) & (cos_aoi > 0.0)
+    beam = np.maximum(np.where(facing, held * cos_aoi, 0.0), forcing.beam_wm2)
+    return direct_sun_wm2(beam_wm2=beam, cos_aoi=cos_aoi, phi=phi_rad,
+                          profile=np.radians(forcing.profile_deg), glass=optics.glass_solar,
+                          louver=optics.louver_solar)
+
+
 class HorizonComfort:
     """The comfort limits of one decision's horizon (module docstring).
 
@@ -104,14 +140,15 @@ class HorizonComfort:
         if self.occupied.shape != (h,):
             raise ValueError(f"occupied mask of shape {self.occupied.shape}, the horizon has "
                              f"{h} steps")
-        sol, vis = optics.layers(forcing, np.radians(np.asarray(angles_deg, float))[:, None])
+        phi = np.radians(np.asarray(angles_deg, float))[:, None]
+        _, vis = optics.layers(forcing, phi)
         f_eye, self.f_body = view_factors(cfg)
         e_v = eye_illuminance_lx(transmitted_wm2=vis.transmitted,
                                  transmitted_beam_wm2=vis.transmitted_beam,
                                  view_factor=f_eye,
                                  luminous_efficacy_lmw=cfg.daylight.luminous_efficacy_lmw)
         shape = (len(angles_deg), h)
-        self.direct_sun_wm2 = np.broadcast_to(sol.transmitted_beam, shape)
+        self.direct_sun_wm2 = np.broadcast_to(direct_sun_bound_wm2(optics, forcing, phi), shape)
         self.dgp = np.broadcast_to(dgp_simplified(e_v), shape)
         self.t_room_c = np.asarray(forcing.t_mrt_k, float) - T_ZERO
         self.sun_max_wm2 = lim.direct_sun_max_wm2

@@ -23,6 +23,7 @@ __all__ = [
     "cutoff_angles",
     "dgp_simplified",
     "direct_sun_wm2",
+    "dni_bound_wm2",
     "eye_illuminance_lx",
     "glare_class",
     "illuminance_for_dgp",
@@ -106,6 +107,36 @@ def direct_sun_wm2(
     """
     return layer_absorption(beam=beam_wm2, diffuse=0.0, cos_aoi=cos_aoi, phi=phi,
                             profile=profile, glass=glass, louver=louver).transmitted_beam
+
+
+def dni_bound_wm2(*, ghi_wm2: ArrayLike, zenith_deg: ArrayLike,
+                  dni_extra_wm2: ArrayLike) -> FloatArray:
+    """The largest direct normal irradiance a global horizontal reading allows [W/m2].
+
+    Parameters
+    ----------
+    ghi_wm2 : array_like
+        Global horizontal irradiance [W/m2] (negative readings count as 0).
+    zenith_deg : array_like
+        Solar zenith angle [deg].
+    dni_extra_wm2 : array_like
+        Extraterrestrial normal irradiance I0 [W/m2].
+
+    Notes
+    -----
+    docs/model.md#direct-sun-bound. The closure GHI = DNI cos Z + DHI with DHI >= 0 gives
+    DNI <= GHI / cos Z, and the atmosphere only attenuates the beam, DNI <= I0::
+
+        DNI_max = min(I0, GHI / cos Z)     (0 with the sun at or below the horizon)
+
+    Unlike a decomposition (Erbs gives no beam at all above Z = 87°,
+    docs/model.md#decomposition), this is no estimate: the true beam never exceeds it.
+    """
+    cos_z = np.cos(np.radians(np.asarray(zenith_deg, dtype=float)))
+    up = cos_z > 0.0
+    ghi = np.clip(np.asarray(ghi_wm2, dtype=float), 0.0, None)
+    ratio = ghi / np.where(up, cos_z, 1.0)
+    return np.where(up, np.minimum(np.asarray(dni_extra_wm2, dtype=float), ratio), 0.0)
 
 
 def eye_illuminance_lx(
