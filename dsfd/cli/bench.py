@@ -275,6 +275,14 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "Friday, which leaves the bundled record's clear and overcast days, a "
                    "Sunday and a Saturday at the Suwon site, unoccupied; panel: the panel's "
                    "occupancy:; none)")
+    _identify_and_diagnostics_options(p)
+    p.add_argument("--json", type=Path, default=None, help="write the figures as JSON "
+                   "(identify: rewritten after every seed)")
+    p.set_defaults(handler=run)
+
+
+def _identify_and_diagnostics_options(p: argparse.ArgumentParser) -> None:
+    """The options of the identify and diagnostics targets (refused by the others)."""
     p.add_argument("--plant", choices=("lumped", "truth"), default=None,
                    help="identify: lumped = the lumped-equivalent plant (the model's structure, "
                    "true parameters known; default), truth = the full-fidelity truth plant")
@@ -299,9 +307,6 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="diagnostics: also count the residual detector's findings on the real "
                    "Aalborg 'Cube' week in DIR (the dsfd convert-aalborg source folder), "
                    "replayed with the self-calibrating model")
-    p.add_argument("--json", type=Path, default=None, help="write the figures as JSON "
-                   "(identify: rewritten after every seed)")
-    p.set_defaults(handler=run)
 
 
 def _seeds(text: str) -> int | tuple[int, ...]:

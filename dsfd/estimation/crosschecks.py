@@ -25,6 +25,9 @@ __all__ = ["FlowCheckSettings", "NightCheckSettings", "NightlyOffsets", "cavity_
            "night_pane_check", "nightly_offsets"]
 
 
+#: A damper set and the mask of its judged readings.
+_Path = tuple[frozenset[str], np.ndarray]
+
 @dataclass(frozen=True, kw_only=True)
 class FlowCheckSettings:
     """Parameters of :func:`cavity_flow_check`.
@@ -125,7 +128,8 @@ def cavity_flow_check(times_s: np.ndarray, v_cav_ms: np.ndarray,
     # readings an open path must move air at: what the model expected, else the drive
     should_move = np.where(np.isfinite(expected), expected >= st.min_expected_ms,
                            drive >= st.min_drive_k)
-    live, dead = [], []
+    live: list[_Path] = []
+    dead: list[_Path] = []
     for s in sorted({s for s in sets if s}, key=sorted):
         sel = _latest(np.array([x == s for x in sets]) & np.isfinite(v) & should_move,
                       st.min_samples)
@@ -133,6 +137,14 @@ def cavity_flow_check(times_s: np.ndarray, v_cav_ms: np.ndarray,
             (live if np.median(v[sel]) >= need else dead).append((s, sel))
     if not dead:
         return None
+    return _dead_paths(t, v, dead, live, base, need)
+
+
+
+def _dead_paths(t: np.ndarray, v: np.ndarray, dead: list[_Path], live: list[_Path],
+                base: float, need: float) -> Finding:
+    """The finding of paths that moved no air: the damper every dead path shares and no
+    live path uses, else the paths without a common cause."""
     evidence = tuple(Evidence(
         signal=f"crosscheck:v_cav_ms[{'+'.join(sorted(s))}]",
         shift=float(np.median(v[sel])) - base, shift_sd=np.nan, unit="m/s",
