@@ -51,7 +51,7 @@ from dsfd.daemon.logging_setup import get_logger
 from dsfd.daemon.stake import with_stake
 from dsfd.estimation.crosschecks import cavity_flow_check, night_pane_check
 from dsfd.estimation.diagnostics import Finding, parameter_change, residual_change
-from dsfd.estimation.lifecycle import Changes, reconcile
+from dsfd.estimation.lifecycle import Changes, confirmed, reconcile
 from dsfd.storage import findings as table
 from dsfd.storage.evidence import (
     CROSSCHECK_WINDOW_S,
@@ -73,9 +73,10 @@ from dsfd.storage.parameter_series import (
 )
 from dsfd.storage.schema import BUSY_TIMEOUT_MS
 
-__all__ = ["CHECK_EVERY_S", "CROSSCHECK_WINDOW_S", "DAMPER_SHORT", "NIGHT_EVERY_S",
-           "NIGHT_MIN_S", "PARAMETER_EVERY_S", "PARAMETER_MIN_DAYS", "PARAMETER_WINDOW_S",
-           "RESIDUAL_EVERY_S", "RESIDUAL_MIN_S", "FindingsStage", "NightSite", "detect"]
+__all__ = ["CHECK_EVERY_S", "CROSSCHECK_WINDOW_S", "DAMPER_SHORT", "FLOW_CONFIRM_S",
+           "NIGHT_EVERY_S", "NIGHT_MIN_S", "PARAMETER_EVERY_S", "PARAMETER_MIN_DAYS",
+           "PARAMETER_WINDOW_S", "RESIDUAL_EVERY_S", "RESIDUAL_MIN_S", "FindingsStage",
+           "NightSite", "detect"]
 
 log = get_logger("dsfd.findings")
 
@@ -95,6 +96,10 @@ PARAMETER_EVERY_S = 6 * 3600.0
 _CADENCE = (("residual", RESIDUAL_EVERY_S), ("night", NIGHT_EVERY_S),
             ("parameter", PARAMETER_EVERY_S))
 _FLOW_KINDS = ("damper_no_flow", "cavity_no_flow", "cavity_flow_when_closed")
+#: A cross-check finding opens once two checks 5 min apart report it (the alarm time delay
+#: of estimation.lifecycle.confirmed): on the bench's clean winter days a weak healthy path
+#: crossed the contrast for a single check (5 min) now and then.
+FLOW_CONFIRM_S = 300.0
 
 
 def _flow_finding(conn: sqlite3.Connection, now_s: float) -> Finding | None:
@@ -193,6 +198,8 @@ class FindingsStage:
         #: The last check that ran the residual CUSUM, the night check, the parameters.
         self._ran_s: dict[str, float] = {}
         self._thread: threading.Thread | None = None
+        #: Cross-check findings seen but not yet confirmed: key → first seen [s].
+        self._pending: dict[tuple[str, str], float] = {}
         #: Checks that failed (logged); the next one is tried as usual.
         self.failures = 0
 
@@ -241,7 +248,10 @@ class FindingsStage:
                            ("parameter", "parameter_shift")):
             if kind in judged:
                 self._ran_s[name] = now_s
-        changes = reconcile(found, table.load(conn), judged=judged)
+        stored = table.load(conn)
+        found, self._pending = confirmed(found, stored, self._pending, now_s=now_s,
+                                         confirm_s=FLOW_CONFIRM_S, kinds=_FLOW_KINDS)
+        changes = reconcile(found, stored, judged=judged)
         opened = table.apply(conn, changes, now_s=now_s, run_id=self.run_id())
         for fid, f in zip(opened, changes.opened, strict=True):
             log.warning("finding #%d %s: %s", fid, f.kind, f.action, finding_id=fid,

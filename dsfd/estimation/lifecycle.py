@@ -19,13 +19,13 @@ stored findings (docs/model.md#findings):
 
 from __future__ import annotations
 
-from collections.abc import Collection, Iterable, Sequence
+from collections.abc import Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 from dsfd.estimation.diagnostics import Finding
 
 __all__ = ["ACKNOWLEDGED", "ENDED", "FINDING_KINDS", "OPEN", "Changes", "StoredFinding",
-           "key_of", "reconcile", "subject_of"]
+           "confirmed", "key_of", "reconcile", "subject_of"]
 
 OPEN, ACKNOWLEDGED, ENDED = "open", "acknowledged", "ended"
 #: Every kind the detectors report (one Home Assistant problem sensor and one metric each).
@@ -124,3 +124,32 @@ def reconcile(detected: Iterable[Finding], stored: Sequence[StoredFinding], *,
     out.ended = [s.finding_id for k, s in open_by_key.items()
                  if k not in seen and (judged is None or s.kind in judged)]
     return out
+
+
+def confirmed(detected: Iterable[Finding], stored: Sequence[StoredFinding],
+              pending: Mapping[tuple[str, str], float], *, now_s: float, confirm_s: float,
+              kinds: Collection[str]) -> tuple[list[Finding], dict[tuple[str, str], float]]:
+    """Hold back new findings of ``kinds`` until their evidence has lasted ``confirm_s``.
+
+    The time delay of an alarm (BACnet's ``Time_Delay`` of intrinsic reporting, ASHRAE 135
+    clause 13.3: a condition must persist that long before the object reports it): a
+    detection of one of ``kinds`` whose key has no open stored finding passes once the
+    same key has been detected, check after check, since at least ``confirm_s`` ago.
+    ``pending`` maps each such key to when it was first seen; the new map is returned with
+    the detections that pass (the others unchanged). A key not detected in this check
+    starts again. Open findings are refreshed (or ended) as usual: only the opening waits.
+    """
+    is_open = {s.key for s in stored if s.state == OPEN}
+    out: list[Finding] = []
+    waiting: dict[tuple[str, str], float] = {}
+    for f in detected:
+        key = key_of(f)
+        if f.kind not in kinds or key in is_open:
+            out.append(f)
+            continue
+        first = pending.get(key, now_s)
+        if now_s - first >= confirm_s:
+            out.append(f)
+        else:
+            waiting[key] = first
+    return out, waiting

@@ -5,7 +5,15 @@ starts after the acknowledgement."""
 from __future__ import annotations
 
 from dsfd.estimation.diagnostics import Evidence, Finding
-from dsfd.estimation.lifecycle import ACKNOWLEDGED, ENDED, OPEN, StoredFinding, key_of, reconcile
+from dsfd.estimation.lifecycle import (
+    ACKNOWLEDGED,
+    ENDED,
+    OPEN,
+    StoredFinding,
+    confirmed,
+    key_of,
+    reconcile,
+)
 
 
 def _finding(kind: str = "damper_no_flow", *, start_s: float = 1000.0, subject: str = "IT",
@@ -87,3 +95,27 @@ def test_a_detector_that_did_not_run_ends_none_of_its_findings():
     ch = reconcile([], [residual, flow], judged={"damper_no_flow"})
     assert ch.ended == [5]  # the cross-check ran and no longer sees it; the CUSUM did not run
     assert reconcile([], [residual, flow], judged=set()).ended == []
+
+
+def test_a_new_cross_check_finding_waits_for_its_time_delay_an_open_one_does_not():
+    """Alarm time delay (BACnet Time_Delay): the evidence must be reported check after
+    check for ``confirm_s`` before a finding opens; a check without it starts again."""
+    flow = ("damper_no_flow",)
+    f = _finding()
+    kept, pending = confirmed([f], [], {}, now_s=0.0, confirm_s=300.0, kinds=flow)
+    assert kept == [] and pending == {key_of(f): 0.0}
+    kept, pending = confirmed([f], [], pending, now_s=299.0, confirm_s=300.0, kinds=flow)
+    assert kept == [] and pending == {key_of(f): 0.0}
+    kept, pending = confirmed([f], [], pending, now_s=300.0, confirm_s=300.0, kinds=flow)
+    assert kept == [f] and pending == {}
+    # a blip: seen once, gone at the next check, seen again later: the delay starts again
+    _, pending = confirmed([f], [], {}, now_s=0.0, confirm_s=300.0, kinds=flow)
+    _, pending = confirmed([], [], pending, now_s=300.0, confirm_s=300.0, kinds=flow)
+    kept, pending = confirmed([f], [], pending, now_s=600.0, confirm_s=300.0, kinds=flow)
+    assert kept == [] and pending == {key_of(f): 600.0}
+    # an open finding of that key is refreshed at once; other kinds never wait
+    kept, _ = confirmed([f], [_stored(1, OPEN)], {}, now_s=0.0, confirm_s=300.0, kinds=flow)
+    assert kept == [f]
+    r = _finding("residual_shift", subject="residual:x3_c")
+    kept, pending = confirmed([r], [], {}, now_s=0.0, confirm_s=300.0, kinds=flow)
+    assert kept == [r] and pending == {}
