@@ -208,7 +208,7 @@ def aalborg_findings(panel: Path, source_dir: Path) -> dict[str, float | str]:
     """
     from dsfd.config import load_panel
     from dsfd.convert.aalborg import convert_aalborg
-    from dsfd.estimation.diagnostics import residual_change
+    from dsfd.estimation.diagnostics import residual_change, residual_settings
     from dsfd.estimation.stepdata import step_data
     from dsfd.estimation.validation import replay_scores
 
@@ -217,7 +217,8 @@ def aalborg_findings(panel: Path, source_dir: Path) -> dict[str, float | str]:
     replay = replay_scores(cfg, steps, horizons=(1,))
     t = replay.one_step_time_s
     found = [f for name, err in replay.one_step_error_k.items()
-             if (f := residual_change(t, err, signal=f"{name}_c", unit="K")) is not None]
+             if (f := residual_change(t, err, signal=f"{name}_c", unit="K",
+                                      settings=residual_settings("K"))) is not None]
     return {"aalborg.days": float((t[-1] - t[0]) / SECONDS_PER_DAY) if t.size else 0.0,
             "aalborg.outputs": ",".join(replay.one_step_error_k),
             "aalborg.false_findings": float(len(found)),

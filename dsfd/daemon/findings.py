@@ -50,7 +50,12 @@ from dsfd.config.panel import PanelConfig
 from dsfd.daemon.logging_setup import get_logger
 from dsfd.daemon.stake import with_stake
 from dsfd.estimation.crosschecks import cavity_flow_check, night_pane_check
-from dsfd.estimation.diagnostics import Finding, parameter_change, residual_change
+from dsfd.estimation.diagnostics import (
+    Finding,
+    parameter_change,
+    residual_change,
+    residual_settings,
+)
 from dsfd.estimation.lifecycle import Changes, confirmed, reconcile
 from dsfd.storage import findings as table
 from dsfd.storage.evidence import (
@@ -115,7 +120,8 @@ def _residual_findings(conn: sqlite3.Connection, now_s: float) -> list[Finding]:
     times, errors = residual_series(conn, now_s - RESIDUAL_WINDOW_S, now_s)
     out = []
     for reading, _, unit in RESIDUALS:
-        f = residual_change(times, errors[reading], signal=reading, unit=unit)
+        f = residual_change(times, errors[reading], signal=reading, unit=unit,
+                            settings=residual_settings(unit))
         if f is not None:
             out.append(f)
     return out

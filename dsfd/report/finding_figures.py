@@ -23,7 +23,7 @@ from matplotlib.figure import Figure
 
 from dsfd.config.panel import Parameters
 from dsfd.estimation.crosschecks import FlowCheckSettings, NightCheckSettings, nightly_offsets
-from dsfd.estimation.diagnostics import ResidualSettings, page_cusum, residual_blocks
+from dsfd.estimation.diagnostics import page_cusum, residual_blocks, residual_settings
 from dsfd.report.kpis import zone_name
 from dsfd.report.plotting import OUTSIDE, STATE_COLOURS, STATE_LABELS, WIDTH_IN
 from dsfd.storage.evidence import (
@@ -104,7 +104,7 @@ def residual_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h: 
     and the CUSUM statistic against its threshold."""
     reading = _signal(row)
     unit = next((u for r, _, u in RESIDUALS if r == reading), "")
-    st = ResidualSettings()
+    st = residual_settings(unit)
     end = _end_s(row)
     ax_t = _Axes(offset_h, float(row["start_s"]) - 86400.0, end + _HOUR)
     fig = Figure(figsize=(WIDTH_IN, 5.0), layout="constrained")
@@ -136,10 +136,12 @@ def residual_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h: 
     ax_t.marks(top, row, legend=True)
     top.legend(**OUTSIDE)
     ax_t.setup(top, label=False)
-    cs = page_cusum(b.z, k=st.k_sd, h=st.h_sd)
+    cs = page_cusum(b.z, k=b.k, h=st.h_sd)
     n = cs.statistic.size
     bottom.plot(ax_t.local(mid[:n]), cs.statistic, color=colour, lw=1.3,
-                label=f"CUSUM (k = {st.k_sd:g}), recomputed from the stored rows")
+                label=(f"CUSUM (k = {st.k_sd:g} spreads, or {st.min_shift / 2:g} {unit} if "
+                       "larger), recomputed from the stored rows" if st.min_shift else
+                       f"CUSUM (k = {st.k_sd:g}), recomputed from the stored rows"))
     bottom.axhline(st.h_sd, color="black", ls="--", lw=1.0, label=f"threshold h = {st.h_sd:g}")
     bottom.set_ylim(bottom=0)
     bottom.set_ylabel("CUSUM statistic\n[long-run sd]")

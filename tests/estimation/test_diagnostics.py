@@ -13,6 +13,7 @@ from dsfd.estimation.diagnostics import (
     page_cusum,
     parameter_change,
     residual_change,
+    residual_settings,
 )
 
 DAY = 86400.0
@@ -85,6 +86,32 @@ def test_no_finding_on_thirty_days_of_stationary_residuals(seed):
     t, r = _residual_noise(100 + seed, 30.0)
     r[np.random.default_rng(seed).uniform(size=r.size) < 0.02] = np.nan  # missing samples
     assert residual_change(t, r, signal="x2_c", unit="K") is None
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_a_day_whose_errors_sit_a_few_tenths_off_is_no_finding_for_a_temperature(seed):
+    """A calibrated model's errors on a different kind of day sit 0.1-0.34 K off the days
+    before (the bench's clean winter days) while their spread is 0.05-0.08 K: in spreads
+    alone that is a change. With the temperature settings (allowance at least 0.4 K) it is
+    not, while a 1 K thermocouple step still is within hours, and a 0.5 K/day drift within
+    about a day."""
+    t, r = _residual_noise(seed, 8.0, sigma=0.08, daily_k=0.1)
+    day6 = (t >= T0 + 6 * DAY) & (t < T0 + 7 * DAY)
+    off = r + np.where(day6, 0.34, 0.0)
+    assert residual_change(t, off, signal="x2_c", unit="K") is not None  # spreads alone
+    st = residual_settings("K")
+    assert st.min_shift == pytest.approx(0.8)
+    assert residual_change(t, off, signal="x2_c", unit="K", settings=st) is None
+    step_s = T0 + 6.3 * DAY
+    step = residual_change(t, r + np.where(t >= step_s, 1.0, 0.0), signal="x3_c", unit="K",
+                           settings=st)
+    assert step is not None and step_s <= step.detected_s <= step_s + 3 * 3600.0
+    drift = residual_change(t, r + np.clip((t - step_s) / DAY, 0.0, None) * 0.5,
+                            signal="x3_c", unit="K", settings=st)
+    # the issue's target for a 0.5 K/day drift is one day; this allowance takes a little
+    # longer (1.0-1.1 days on these residuals): the price of no finding on a different day
+    assert drift is not None and step_s + 0.5 * DAY < drift.detected_s <= step_s + 1.25 * DAY
+    assert residual_settings("m/s").min_shift == 0.0  # the cavity speed: spreads only
 
 
 def test_no_statistic_without_a_reference_and_a_gap_is_not_a_change():
