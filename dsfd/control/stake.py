@@ -70,7 +70,7 @@ def energy_at_stake(model: LumpedModel, steps: StepData, theta_before: np.ndarra
         docs/model.md#initial-state), open loop: the model's own states, not the readings,
         carry each vector's consequences through the days.
     theta_before, theta_now : array (9,) or (13,)
-        θ, optionally with the heat-flux offsets q (docs/model.md#calibration).
+        θ, optionally with the heat-flux offsets q (docs/model.md#parameters).
 
     Notes
     -----
