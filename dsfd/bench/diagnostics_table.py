@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from dsfd.config.panel import REGIME_OPENINGS
+from dsfd.storage.evidence import DAMPER_SHORT
 
 __all__ = ["NAMES", "PREFIX_DAYS", "SECONDS_PER_DAY", "SUN_GHI_WM2", "Scenario", "scenarios",
            "score"]
@@ -33,8 +34,6 @@ PREFIX_DAYS = 8.0
 SUN_GHI_WM2 = 120.0
 #: The record's morning (08:30 in Suwon) where the stuck-damper runs start.
 MORNING_ISO = "2022-01-01T23:30:00Z"
-_SHORT = {"exterior_bottom": "EB", "exterior_top": "ET", "interior_bottom": "IB",
-          "interior_top": "IT"}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -148,7 +147,7 @@ def _minutes(conn: sqlite3.Connection, scenario: Scenario, since_s: float, until
     for afr, or_pct in conn.execute(
             "SELECT applied_afr, applied_or_pct FROM model WHERE time_s >= ? AND time_s < ? "
             "AND applied_afr IS NOT NULL", (since_s, until_s)):
-        opened = {_SHORT[n] for n in REGIME_OPENINGS.get(int(afr), ())}
+        opened = {DAMPER_SHORT[n] for n in REGIME_OPENINGS.get(int(afr), ())}
         used += bool(or_pct) and "IT" in opened
     return float(used)
 
