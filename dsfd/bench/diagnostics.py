@@ -128,6 +128,7 @@ def bench_diagnostics(config: Path, *, seeds: Sequence[int], seasons: Sequence[s
                                         aalborg))
         if on_figures:
             on_figures(dict(figures))
+    replayed = 0
     with tempfile.TemporaryDirectory(prefix="dsfd-bench-diag-") as tmp:
         root = keep or Path(tmp)
         root.mkdir(parents=True, exist_ok=True)
@@ -145,6 +146,7 @@ def bench_diagnostics(config: Path, *, seeds: Sequence[int], seasons: Sequence[s
                         if progress:
                             progress(f"{key}: replaying the detectors over {rechecked / key}")
                         fig = recheck(rechecked / key, scenario, panel, root / key)
+                        replayed += 1
                     else:
                         if progress:
                             progress(f"{key}: {scenario.days:g} simulated days, fault "
@@ -154,6 +156,10 @@ def bench_diagnostics(config: Path, *, seeds: Sequence[int], seasons: Sequence[s
                     figures.update({f"{key}.{k}": v for k, v in fig.items()})
                     if on_figures:
                         on_figures(dict(figures))
+    if rechecked is not None and not replayed:
+        raise ValueError(f"--recheck {rechecked}: no kept run of these seasons, scenarios and "
+                         "seeds there (a run is a <season>.<scenario>.seed<N> folder with its "
+                         "timeseries.sqlite, as --keep-state leaves it)")
     return figures
 
 
@@ -185,9 +191,7 @@ def recheck(state: Path, scenario: Scenario, panel: Path, work: Path
         conn.commit()
         t0, t1 = (float(v) for v in conn.execute(
             "SELECT MIN(time_s), MAX(time_s) FROM decisions").fetchone())
-        stage = FindingsStage(db, run_id=lambda: None, panel=cfg, night=NightSite(
-            latitude_deg=cfg.site.latitude_deg, longitude_deg=cfg.site.longitude_deg,
-            room_c=cfg.room.t_in_c))
+        stage = FindingsStage(db, run_id=lambda: None, panel=cfg, night=NightSite.of(cfg))
         for now in np.arange(t0 + CHECK_EVERY_S, t1 + 1.0, CHECK_EVERY_S):
             stage.check(conn, float(now))
     finally:

@@ -149,9 +149,8 @@ class _Daemon:
         self.metrics = _metrics_file(cfg)
         self.metrics_failures = 0
         #: The diagnostics, run off the loop on what was stored (issue 38).
-        self.findings = FindingsStage(store.path, run_id=lambda: store.run_id, night=NightSite(
-            latitude_deg=cfg.site.latitude_deg, longitude_deg=cfg.site.longitude_deg,
-            room_c=cfg.room.t_in_c), panel=cfg)
+        self.findings = FindingsStage(store.path, run_id=lambda: store.run_id,
+                                      night=NightSite.of(cfg), panel=cfg)
 
     async def wait_until(self, deadline_s: float) -> None:
         """Sleep until the deadline, or until a signal asks to stop or reload."""

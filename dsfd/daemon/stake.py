@@ -9,7 +9,8 @@ change. The result joins the finding as one more piece of evidence (signal
 ``energy_at_stake``, kWh per week) and a sentence of its action.
 
 Runs in the findings thread (a week of one-minute cycles: about 1 s to read, 6 s of CPU to
-simulate twice), only when the parameter detector reports a finding.
+simulate twice per finding), only when the parameter detector reports a finding; the week is
+read once per check however many parameters moved.
 """
 
 from __future__ import annotations
@@ -26,12 +27,12 @@ from dsfd.config.panel import PanelConfig
 from dsfd.control.stake import EnergyAtStake, energy_at_stake
 from dsfd.estimation.diagnostics import Evidence, Finding
 from dsfd.estimation.params import FIT_NAMES
-from dsfd.estimation.stepdata import model_config, step_data
+from dsfd.estimation.stepdata import StepData, model_config, step_data
 from dsfd.measured import MeasuredDataError
 from dsfd.physics.model import LumpedModel
 from dsfd.storage.history import HistoryError, measured_from_history, read_history
 
-__all__ = ["STAKE_SIGNAL", "STAKE_WINDOW_S", "theta_at", "with_stake"]
+__all__ = ["STAKE_SIGNAL", "STAKE_WINDOW_S", "stake_record", "theta_at", "with_stake"]
 
 #: The record the stake is costed over: the last week, as the issue asks.
 STAKE_WINDOW_S = 7 * 86400.0
@@ -54,8 +55,20 @@ def theta_at(conn: sqlite3.Connection, time_s: float, *, before: bool = False
     return np.array([float(values.get(n, other.get(n, 0.0))) for n in FIT_NAMES])
 
 
+def stake_record(panel: PanelConfig, state_dir: Path, now_s: float) -> StepData | None:
+    """The last :data:`STAKE_WINDOW_S` of stored cycles as model steps, or None when the
+    store cannot give a usable record. Read once per check and shared by its findings."""
+    try:
+        data = measured_from_history(read_history(state_dir, since_s=now_s - STAKE_WINDOW_S,
+                                                  until_s=now_s))
+        steps = step_data(panel, data)
+    except (HistoryError, MeasuredDataError, ValueError):
+        return None
+    return steps if steps.n_steps >= 2 else None
+
+
 def _stake(conn: sqlite3.Connection, f: Finding, now_s: float, panel: PanelConfig,
-           state_dir: Path) -> EnergyAtStake | None:
+           steps: StepData) -> EnergyAtStake | None:
     name = f.evidence[0].signal.removeprefix("parameter:")
     now, before = theta_at(conn, now_s), theta_at(conn, f.start_s, before=True)
     if now is None or before is None or name not in FIT_NAMES:
@@ -63,22 +76,15 @@ def _stake(conn: sqlite3.Connection, f: Finding, now_s: float, panel: PanelConfi
     changed = now.copy()
     i = FIT_NAMES.index(name)
     changed[i] = before[i]  # only this parameter's move is costed
-    try:
-        data = measured_from_history(read_history(state_dir, since_s=now_s - STAKE_WINDOW_S,
-                                                  until_s=now_s))
-        steps = step_data(panel, data)
-    except (HistoryError, MeasuredDataError, ValueError):
-        return None
-    if steps.n_steps < 2:
-        return None
     return energy_at_stake(LumpedModel(model_config(panel, steps.step_s)), steps, changed, now)
 
 
 def with_stake(conn: sqlite3.Connection, f: Finding, now_s: float, *, panel: PanelConfig,
-               state_dir: Path) -> Finding:
-    """``f`` (a ``parameter_shift``) with its energy at stake added, or unchanged when the
-    stored record cannot say (no parameters before the change, no usable week)."""
-    s = _stake(conn, f, now_s, panel, state_dir)
+               steps: StepData | None) -> Finding:
+    """``f`` (a ``parameter_shift``) with its energy at stake over ``steps`` (the check's
+    :func:`stake_record`) added, or unchanged when the stored record cannot say (no
+    parameters before the change, no usable week)."""
+    s = None if steps is None else _stake(conn, f, now_s, panel, steps)
     if s is None or not math.isfinite(s.per_week_kwh):
         return f
     ev = Evidence(signal=STAKE_SIGNAL, shift=s.per_week_kwh, shift_sd=math.nan,

@@ -26,7 +26,9 @@ import numpy as np
 from dsfd.estimation.parameter_watch import parameter_action
 
 __all__ = ["TEMPERATURE_MIN_SHIFT_K", "Cusum", "Evidence", "Finding", "ParameterSettings",
-           "ResidualBlocks", "ResidualSettings", "block_means", "cusum_confidence",
+           "ResidualBlocks", "ResidualSettings", "between_day_variance", "block_labels",
+           "block_means",
+           "cusum_confidence",
            "page_cusum", "parameter_change", "residual_blocks", "residual_change",
            "residual_settings"]
 
@@ -249,21 +251,48 @@ class ResidualBlocks:
     k: np.ndarray
 
 
+def block_labels(times_s: np.ndarray, residuals: np.ndarray, labels: np.ndarray,
+                 blocks: np.ndarray, *, block_s: float) -> np.ndarray:
+    """Per block of :func:`block_means`, the label (the control in force) held by most of
+    its finite residuals; NaN where none of them has a known label."""
+    t = np.asarray(times_s, float)
+    lab = np.asarray(labels, float)
+    ok = np.isfinite(t) & np.isfinite(np.asarray(residuals, float)) & np.isfinite(lab)
+    idx = np.floor(t[ok] / block_s).astype(np.int64)
+    out = np.full(blocks.size, np.nan)
+    if blocks.size == 0 or idx.size == 0:
+        return out
+    pos = np.clip(np.searchsorted(blocks, idx), 0, blocks.size - 1)
+    inside = blocks[pos] == idx
+    pairs, counts = np.unique(np.stack([pos[inside], lab[ok][inside]], axis=1), axis=0,
+                              return_counts=True)
+    for (i, value), _count in sorted(zip(map(tuple, pairs), counts, strict=True),
+                                    key=lambda item: item[1]):
+        out[int(i)] = value  # ascending counts: the most held label is written last
+    return out
+
+
 def residual_blocks(times_s: np.ndarray, residuals: np.ndarray, *,
-                    settings: ResidualSettings | None = None) -> ResidualBlocks:
+                    settings: ResidualSettings | None = None,
+                    control: np.ndarray | None = None) -> ResidualBlocks:
     """Block means of one output's prediction errors, standardised by their same-time
-    reference (the first steps of :func:`residual_change`; ``dsfd report`` draws them)."""
+    reference (the first steps of :func:`residual_change`; ``dsfd report`` draws them).
+    ``control``: per residual, the control it was predicted under (the regime in force);
+    a block is then compared only with blocks of the same control."""
     st = settings or ResidualSettings()
     blocks, means = block_means(times_s, residuals, block_s=st.block_s,
                                 min_samples=st.min_block_samples)
-    centre, scale = _same_time_reference(blocks, means, st)
+    labels = (None if control is None else
+              block_labels(times_s, residuals, control, blocks, block_s=st.block_s))
+    centre, scale = _same_time_reference(blocks, means, st, labels)
     with np.errstate(invalid="ignore", divide="ignore"):
         k = np.fmax(st.k_sd, 0.5 * st.min_shift / scale)
     return ResidualBlocks(blocks, means, centre, scale, (means - centre) / scale, k)
 
 
 def residual_change(times_s: np.ndarray, residuals: np.ndarray, *, signal: str, unit: str,
-                    settings: ResidualSettings | None = None) -> Finding | None:
+                    settings: ResidualSettings | None = None,
+                    control: np.ndarray | None = None) -> Finding | None:
     """The first change in one output's prediction errors, or None.
 
     Parameters
@@ -275,6 +304,12 @@ def residual_change(times_s: np.ndarray, residuals: np.ndarray, *, signal: str, 
     signal, unit : str
         The output's name (``x3_c``) and unit, for the evidence.
     settings : ResidualSettings, optional
+    control : array (n,), optional
+        The control each residual was predicted under (the regime in force; NaN unknown).
+        A block is compared only with the same time of day's blocks under the same control
+        (held by most of its residuals; an unknown control is compared with any): a lumped model's
+        error differs between controls, and a control first used at an hour of the day is
+        not a change of the façade.
 
     Returns
     -------
@@ -283,7 +318,7 @@ def residual_change(times_s: np.ndarray, residuals: np.ndarray, *, signal: str, 
         that block's end) and the block after its last zero (``start_s``: that block's start).
     """
     st = settings or ResidualSettings()
-    b = residual_blocks(times_s, residuals, settings=st)
+    b = residual_blocks(times_s, residuals, settings=st, control=control)
     blocks, means, centre, z = b.blocks, b.means, b.centre, b.z
     cs = page_cusum(z, k=b.k, h=st.h_sd)
     if cs.alarm is None:
@@ -303,12 +338,13 @@ def residual_change(times_s: np.ndarray, residuals: np.ndarray, *, signal: str, 
                        "on the façade (the residual alone cannot tell which)"))
 
 
-def _same_time_reference(blocks: np.ndarray, means: np.ndarray, st: ResidualSettings
-                         ) -> tuple[np.ndarray, np.ndarray]:
+def _same_time_reference(blocks: np.ndarray, means: np.ndarray, st: ResidualSettings,
+                         labels: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Each block's centre and scale (NaN where the history is too short).
 
     Centre: the median of the blocks at the same time of day (± ``half_width_blocks``) on
-    the ``reference_days`` previous days. Scale: 1.4826 MAD (at least ``scale_floor``) of
+    the ``reference_days`` previous days (with ``labels``: those of the block's own
+    label). Scale: 1.4826 MAD (at least ``scale_floor``) of
     the deviations from their own centres over the ``reference_days`` days that end
     ``guard_blocks`` before the block: pooled over all times of day, so a few days give a
     steady spread.
@@ -323,6 +359,13 @@ def _same_time_reference(blocks: np.ndarray, means: np.ndarray, st: ResidualSett
                      for d in range(-st.half_width_blocks, st.half_width_blocks + 1)])
     idx = pos[:, None] - lags[None, :]
     ref = np.where(idx >= 0, dense[np.clip(idx, 0, None)], np.nan)
+    if labels is not None:
+        dense_label = np.full(dense.size, np.nan)
+        dense_label[pos] = labels
+        other = dense_label[np.clip(idx, 0, None)]
+        # an unknown control (NaN, e.g. the first cycle of a run) is compared with any
+        differ = np.isfinite(labels)[:, None] & np.isfinite(other) & (other != labels[:, None])
+        ref = np.where(differ, np.nan, ref)
     enough = np.count_nonzero(np.isfinite(ref), axis=1) >= st.min_reference_blocks
     centre = nan.copy()
     if np.any(enough):
@@ -370,6 +413,15 @@ class ParameterSettings:
     reference_days, guard_days : float, [d]
         The reference is the estimates from ``guard_days + reference_days`` to
         ``guard_days`` before the one tested (7 and 2 days).
+    wander_days : float, [d]
+        The between-day variance is estimated over the estimates from ``guard_days +
+        wander_days`` to ``guard_days`` before (28 days): from a week's six differences its
+        sampling error alone (about ±60 % in τ²) raised findings on clean synthetic days, and
+        a step beyond the guard weighs 1/27 of it.
+    min_wander : int
+        Fewer estimates in that span: no statistic (6: the detector learns a façade's daily
+        wander for about a week before it judges; with 3, 6 of 50 synthetic clean histories
+        of 120 days whose wander is ten posterior sd raised a finding in their first week).
     min_reference : int
         Fewer estimates in the reference: no statistic.
     k_sd, h_sd : float
@@ -380,9 +432,43 @@ class ParameterSettings:
 
     reference_days: float = 7.0
     guard_days: float = 2.0
+    wander_days: float = 28.0
+    min_wander: int = 6
     min_reference: int = 3
     k_sd: float = 1.5
     h_sd: float = 5.0
+
+
+def between_day_variance(values: np.ndarray, sds: np.ndarray) -> float:
+    """Variance of the day-to-day wander of daily estimates beyond their own sd, τ² ≥ 0.
+
+    Parameters
+    ----------
+    values, sds : array (n,)
+        Daily estimates in time order and their sd (same coordinates).
+
+    Returns
+    -------
+    float
+        τ² = max(0, mean over consecutive pairs of ((θ_j+1 − θ_j)² − σ_j² − σ_j+1²) / 2); 0
+        for fewer than two estimates.
+
+    Notes
+    -----
+    A random-effects model of the days, θ_j = μ + u_j + e_j with u_j ~ (0, τ²) the day's own
+    departure and e_j ~ (0, σ_j²) the estimate's error, as in DerSimonian & Laird's
+    method-of-moments estimate of τ² (Controlled Clinical Trials 7, 1986). The moments are
+    taken of successive differences, E[(θ_j+1 − θ_j)²] = σ_j² + σ_j+1² + 2τ², rather than of
+    the deviations from the mean (von Neumann's mean square successive difference, Ann.
+    Math. Statist. 12, 1941): a slow drift adds only the square of one day's step to each
+    difference, so soiling under way in the reference does not hide itself by inflating τ².
+    """
+    v = np.asarray(values, float)
+    sd = np.asarray(sds, float)
+    if v.size < 2:
+        return 0.0
+    excess = np.diff(v) ** 2 - sd[1:] ** 2 - sd[:-1] ** 2
+    return max(0.0, 0.5 * float(np.mean(excess)))
 
 
 def parameter_change(times_s: np.ndarray, values: np.ndarray, sds: np.ndarray, *, name: str,
@@ -402,8 +488,12 @@ def parameter_change(times_s: np.ndarray, values: np.ndarray, sds: np.ndarray, *
 
     Notes
     -----
-    z_i = (θ_i − θ̄_ref) / sqrt(σ_i² + σ̄_ref²), θ̄_ref the precision-weighted mean of the
-    reference and σ̄_ref its standard error; two-sided CUSUM of z with ``k_sd``, ``h_sd``.
+    z_i = (θ_i − θ̄_ref) / sqrt(σ_i² + τ² + σ̄_ref²): τ² the reference days' between-day
+    variance (:func:`between_day_variance`), θ̄_ref their mean weighted by 1/(σ_j² + τ²)
+    and σ̄_ref its standard error; two-sided CUSUM of z with ``k_sd``, ``h_sd``. The
+    posterior sd is the floor of the spread, and a lumped parameter whose clean days
+    wander by more than it (the model's form error changes with the weather) raises the
+    spread by the wander the reference itself shows (docs/model.md#diagnostics-parameters).
     """
     st = settings or ParameterSettings()
     t = np.asarray(times_s, float)
@@ -417,11 +507,15 @@ def parameter_change(times_s: np.ndarray, values: np.ndarray, sds: np.ndarray, *
             continue
         sel = (ok & (t >= t[i] - (st.guard_days + st.reference_days) * SECONDS_PER_DAY)
                & (t < t[i] - st.guard_days * SECONDS_PER_DAY))
-        if np.count_nonzero(sel) < st.min_reference:
+        wander = (ok & (t >= t[i] - (st.guard_days + st.wander_days) * SECONDS_PER_DAY)
+                  & (t < t[i] - st.guard_days * SECONDS_PER_DAY))
+        if (np.count_nonzero(sel) < st.min_reference
+                or np.count_nonzero(wander) < st.min_wander):
             continue
-        w = 1.0 / sd[sel] ** 2
+        tau2 = between_day_variance(v[wander], sd[wander])
+        w = 1.0 / (sd[sel] ** 2 + tau2)
         ref_mean[i] = float(np.sum(w * v[sel]) / np.sum(w))
-        z[i] = (v[i] - ref_mean[i]) / math.sqrt(sd[i] ** 2 + 1.0 / float(np.sum(w)))
+        z[i] = (v[i] - ref_mean[i]) / math.sqrt(sd[i] ** 2 + tau2 + 1.0 / float(np.sum(w)))
     cs = page_cusum(z, k=st.k_sd, h=st.h_sd)
     if cs.alarm is None:
         return None

@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-__all__ = ["DAY_MIN_SPAN_S", "LOG_UNIT", "PARAMETER_MEANING", "daily_estimates",
+__all__ = ["DAY_MIN_SPAN_S", "LOG_UNIT", "OFFSET_UNIT", "PARAMETER_MEANING", "daily_estimates",
            "parameter_action"]
 
 SECONDS_PER_DAY = 86400.0
@@ -31,6 +31,8 @@ DAY_MIN_SPAN_S = 18 * 3600.0
 #: Evidence unit of a parameter fitted in log coordinates: the shift is a natural log, so
 #: exp(shift) is the factor by which the parameter changed.
 LOG_UNIT = "log"
+#: Evidence unit of a heat-flux offset q_x1 … q_x4.
+OFFSET_UNIT = "W/m2"
 
 
 def daily_estimates(times_s: np.ndarray, values: np.ndarray, sds: np.ndarray, *,
@@ -113,6 +115,16 @@ def _slats(word: str) -> str:
             "apart")
 
 
+def _offset(node: str, sensor: str, *, warmer: str, cooler: str) -> dict[int, str]:
+    """A heat-flux offset: a constant heat flux the fit adds to a node's balance, so that
+    node reads warmer (risen) or cooler (fallen) than its modelled heat paths explain."""
+    head = (f"{node} reads {{}} than its heat paths explain, by a constant: first check its "
+            f"sensor {sensor} (a thermocouple offset, a loose or shifted sensor, a wrong "
+            f"calibration in the logger) against a reference thermometer")
+    return {+1: f"{head.format('warmer')}; otherwise {warmer}",
+            -1: f"{head.format('cooler')}; otherwise {cooler}"}
+
+
 #: Per parameter and direction (+1 risen, -1 fallen): what it means for the façade and
 #: what to check.
 PARAMETER_MEANING: dict[str, dict[int, str]] = {
@@ -144,6 +156,21 @@ PARAMETER_MEANING: dict[str, dict[int, str]] = {
         -1: "the inner glass exchanges less heat with the room air than before: something "
             "in front of it traps the air at the glass (a blind or curtain drawn, furniture "
             "against the window); otherwise check the sensors x3 and room air"},
+    "q_x1": _offset("the exterior pane", "x1",
+                    warmer="the glass absorbs more sun than before (dirt on the pane)",
+                    cooler="the glass absorbs less sun than before (cleaned)"),
+    "q_x2": _offset("the insulating glass unit's cavity-side pane", "x2",
+                    warmer="the pane absorbs more sun than before (dirt on the cavity face)",
+                    cooler="the pane absorbs less sun than before"),
+    "q_x3": _offset("the inner (room-side) pane", "x3",
+                    warmer="a heat source at the inner glass (a heater or radiator below the "
+                           "window newly running, equipment against the glass)",
+                    cooler="cold air at the inner glass (a cooling diffuser aimed at it)"),
+    "q_x4": _offset("the louver", "x4",
+                    warmer="the slats take more sun than their read-back angle says (a "
+                           "slipped step: compare the angle by eye with the read-back)",
+                    cooler="the slats take less sun than their read-back angle says (a "
+                           "slipped step: compare the angle by eye with the read-back)"),
     "f": {+1: f"the damper paths resist the air more than before: {_MORE_RESISTANCE}",
           -1: f"the damper paths resist the air less than before: {_LESS_RESISTANCE}"},
     "c": {+1: "the diagonal paths pass more air at the same pressure than before: "
@@ -171,7 +198,7 @@ def parameter_action(name: str, *, side: int, shift: float, shift_sd: float,
         size = f"×{math.exp(shift):.2f}"
     else:
         size = f"by {abs(shift):.3g}{' ' + unit if unit else ''}"
-    head = f"{name} has {direction} {size} ({abs(shift_sd):.1f} posterior sd)"
+    head = f"{name} has {direction} {size} ({abs(shift_sd):.1f} sd of its daily spread)"
     meaning = PARAMETER_MEANING.get(name)
     if meaning is None:
         return (f"the calibrated {head}: the façade changed (glass, screen, dampers) or the "

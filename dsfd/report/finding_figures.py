@@ -24,6 +24,8 @@ from matplotlib.figure import Figure
 from dsfd.config.panel import Parameters
 from dsfd.estimation.crosschecks import FlowCheckSettings, NightCheckSettings, nightly_offsets
 from dsfd.estimation.diagnostics import page_cusum, residual_blocks, residual_settings
+from dsfd.estimation.parameter_watch import LOG_UNIT
+from dsfd.estimation.params import OFFSET_NAMES
 from dsfd.report.kpis import zone_name
 from dsfd.report.plotting import OUTSIDE, STATE_COLOURS, STATE_LABELS, WIDTH_IN
 from dsfd.storage.evidence import (
@@ -114,13 +116,14 @@ def residual_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h: 
     fig.suptitle(f"#{row['finding_id']} residual_shift: one-step prediction error of "
                  f"{label}", fontsize=12, x=0.01, ha="left")
     output = [o for o in RESIDUALS if o[0] == reading]
-    times, errors = (residual_series(conn, float(row["detected_s"]) - RESIDUAL_WINDOW_S,
-                                     ax_t.hi_s, output) if output else (np.zeros(0), {}))
+    times, errors, regime = (residual_series(conn, float(row["detected_s"]) - RESIDUAL_WINDOW_S,
+                                             ax_t.hi_s, output) if output
+                             else (np.zeros(0), {}, np.zeros(0)))
     err = errors.get(reading, np.zeros(0))
     if not np.isfinite(err).any():
         raise NoEvidence(f"no stored readings and predictions of {reading or '?'} in the "
                          "finding's window")
-    b = residual_blocks(times, err, settings=st)
+    b = residual_blocks(times, err, settings=st, control=regime)
     mid = (b.blocks + 0.5) * st.block_s
     seen = (times >= ax_t.lo_s) & (times <= ax_t.hi_s)
     colour = STATE_COLOURS.get(reading[:2], "#8c564b")
@@ -271,15 +274,13 @@ def parameter_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h:
         raise NoEvidence(f"fewer than {PARAMETER_MIN_DAYS} days of {name or '?'} estimates "
                          "with their posterior sd before the last check")
     t_day, z_day, sd_day = series[name]
-    linear = parameter_unit(name) == ""
+    linear = parameter_unit(name) != LOG_UNIT
 
     def physical(z: np.ndarray) -> np.ndarray:  # the detector's coordinate → θ
         return z if linear else np.exp(z)
 
     ax_t = _Axes(offset_h, float(t_day[0]) - 86400.0, end)
-    raw = np.array(conn.execute(
-        f"SELECT time_s, {name} FROM parameters WHERE source = 'online' AND time_s >= ? AND "
-        "time_s <= ? ORDER BY time_s", (ax_t.lo_s, end)).fetchall(), float).reshape(-1, 2)
+    raw = _online_estimates(conn, name, ax_t.lo_s, end)
     fig = Figure(figsize=(WIDTH_IN, 4.2), layout="constrained")
     ax = fig.subplots()
     fig.suptitle(f"#{row['finding_id']} parameter_shift: the calibrated {name}, day by day",
@@ -291,7 +292,9 @@ def parameter_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h:
     ax.errorbar(ax_t.local(mid), centre, yerr=[centre - physical(z_day - sd_day),
                                                physical(z_day + sd_day) - centre],
                 fmt="o", ms=4, capsize=3, color="#1f77b4",
-                label="daily value ± posterior sd (the detector's input)")
+                label=("daily value ± posterior sd (the detector's input)" if name not in
+                       OFFSET_NAMES else "daily value ± the sd it is given (the detector's "
+                       "input)"))
     before = t_day < float(row["start_s"])
     if before.any():
         w = 1.0 / sd_day[before] ** 2
@@ -299,7 +302,8 @@ def parameter_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h:
         ax.plot(ax_t.local(np.array([mid[before][0], float(row["start_s"])])),
                 [level, level], color="black", ls="--", lw=1.1,
                 label="precision-weighted level of the days before the start")
-    unit = {f.name: f.metadata.get("unit") for f in dataclasses.fields(Parameters)}.get(name)
+    unit = {f.name: f.metadata.get("unit") for f in dataclasses.fields(Parameters)}.get(
+        name, "W/m²" if name in OFFSET_NAMES else None)
     ax.set_ylabel(f"{name}\n[{'-' if unit in (None, '1') else unit}]")
     if not linear:
         ax.set_yscale("log")  # the sd is relative: equal bars for equal evidence
@@ -307,6 +311,21 @@ def parameter_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h:
     ax.legend(**OUTSIDE)
     ax_t.setup(ax, label=True)
     return fig
+
+
+def _online_estimates(conn: sqlite3.Connection, name: str, since_s: float, until_s: float
+                      ) -> np.ndarray:
+    """(time, value) of a parameter's on-line estimates; a heat-flux offset is read from the
+    ``other`` JSON column, where the daemon stores it."""
+    if name not in OFFSET_NAMES:
+        return np.array(conn.execute(
+            f"SELECT time_s, {name} FROM parameters WHERE source = 'online' AND time_s >= ? "
+            "AND time_s <= ? ORDER BY time_s", (since_s, until_s)).fetchall(),
+            float).reshape(-1, 2)
+    rows = conn.execute(
+        "SELECT time_s, json_extract(other, ?) FROM parameters WHERE source = 'online' AND "
+        "time_s >= ? AND time_s <= ? ORDER BY time_s", (f"$.{name}", since_s, until_s))
+    return np.array([(t, np.nan if v is None else v) for t, v in rows], float).reshape(-1, 2)
 
 
 def evidence_figure(conn: sqlite3.Connection, row: Mapping[str, Any], *, offset_h: float,

@@ -128,15 +128,21 @@ def flow_series(conn: sqlite3.Connection, since_s: float, until_s: float) -> Flo
 
 def residual_series(conn: sqlite3.Connection, since_s: float, until_s: float,
                     outputs: Sequence[tuple[str, str, str]] = RESIDUALS
-                    ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-    """Times of the stored cycles and, per output reading, its one-step prediction error
-    (GOOD reading minus the ``model`` table's prediction; NaN where either is missing)."""
+                    ) -> tuple[np.ndarray, dict[str, np.ndarray], np.ndarray]:
+    """Times of the stored cycles; per output reading, its one-step prediction error (GOOD
+    reading minus the ``model`` table's prediction; NaN where either is missing); and the
+    regime in force during the step that ended at each cycle (the previous cycle's applied
+    regime in the same run; NaN where unknown), which the prediction was made with."""
     cycles, values = read_rows(conn, since_s, until_s, [r for r, _, _ in outputs],
-                               [p for _, p, _ in outputs])
+                               [*(p for _, p, _ in outputs), "applied_afr"])
     times = np.array([c[2] for c in cycles], float)
+    regime = np.full(times.size, np.nan)
+    for i, ((run0, c0, _), (run, cycle, _)) in enumerate(itertools.pairwise(cycles), start=1):
+        if run0 == run and c0 == cycle - 1:
+            regime[i] = values[(run0, c0)].get("applied_afr", np.nan)
     return times, {reading: np.array([values[c[:2]].get(reading, np.nan)
                                       - values[c[:2]].get(pred, np.nan) for c in cycles], float)
-                   for reading, pred, _ in outputs}
+                   for reading, pred, _ in outputs}, regime
 
 
 @dataclass(frozen=True, eq=False)

@@ -6,22 +6,28 @@ parameters, n as it is), over the last :data:`PARAMETER_WINDOW_S` of complete UT
 the calibration last started from its priors (a ``prior`` row: what came before is another
 history), one value a day (:func:`dsfd.estimation.parameter_watch.daily_estimates`). Rows
 without an sd (written before schema 8) are left out.
+
+The heat-flux offsets q_x1 … q_x4 [W/m²] (the ``other`` column) are watched too: a sensor
+that reads off by a constant (a thermocouple offset) moves its node's offset, since the
+state update takes the reading as it is. The rows carry no sd for them, so each estimate is
+given :data:`OFFSET_SD_FLOOR_WM2`; the detector's between-day variance does the rest.
 """
 
 from __future__ import annotations
 
+import json
 import math
 import sqlite3
 
 import numpy as np
 
 from dsfd.config.panel import PARAMETER_NAMES
-from dsfd.estimation.parameter_watch import LOG_UNIT, daily_estimates
-from dsfd.estimation.params import LINEAR_NAMES
+from dsfd.estimation.parameter_watch import LOG_UNIT, OFFSET_UNIT, daily_estimates
+from dsfd.estimation.params import LINEAR_NAMES, OFFSET_NAMES
 from dsfd.storage.schema import PARAMETER_SD_COLUMNS
 
-__all__ = ["PARAMETER_MIN_DAYS", "PARAMETER_WINDOW_S", "DailySeries", "parameter_series",
-           "parameter_unit"]
+__all__ = ["OFFSET_SD_FLOOR_WM2", "PARAMETER_MIN_DAYS", "PARAMETER_WINDOW_S", "DailySeries",
+           "parameter_series", "parameter_unit"]
 
 #: The parameter detector compares each day with the 7 days ending 2 days before it and
 #: needs 3 of them (ParameterSettings): it runs once 5 days make a series ...
@@ -29,37 +35,64 @@ PARAMETER_MIN_DAYS = 5
 #: ... on the last 3 weeks.
 PARAMETER_WINDOW_S = 21 * 86400.0
 
+#: The sd given to each stored estimate of a heat-flux offset [W/m²] (the rows carry none):
+#: the least spread credited to a day's value. On the diagnostics bench's 8 clean winter days
+#: the daily values of q_x2 … q_x4 moved 0.1–4 W/m² from day to day (q_x1, the exterior pane
+#: in the sun, 5–30); a thermocouple reading 1 K high on the inner pane moved q_x3 by 15–18.
+OFFSET_SD_FLOOR_WM2 = 2.0
+
 #: One parameter's daily series: the days' times (the last estimate of each) [s], values
 #: and sds, in the fitting coordinates.
 DailySeries = tuple[np.ndarray, np.ndarray, np.ndarray]
 
 
 def parameter_unit(name: str) -> str:
-    """The unit of a parameter's series: :data:`LOG_UNIT` where it is ln θ, '' for n."""
+    """The unit of a parameter's series: :data:`LOG_UNIT` where it is ln θ, '' for n,
+    W/m2 for a heat-flux offset."""
+    if name in OFFSET_NAMES:
+        return OFFSET_UNIT
     return "" if name in LINEAR_NAMES else LOG_UNIT
 
 
 def parameter_series(conn: sqlite3.Connection, now_s: float
                      ) -> dict[str, DailySeries] | None:
-    """Each θ parameter's daily series up to the last complete UTC day before ``now_s``;
-    None while fewer than :data:`PARAMETER_MIN_DAYS` days make one (the detector does not
-    run)."""
+    """Each θ parameter's and heat-flux offset's daily series up to the last complete UTC
+    day before ``now_s``; None while fewer than :data:`PARAMETER_MIN_DAYS` days make one
+    (the detector does not run)."""
     until = math.floor(now_s / 86400.0) * 86400.0  # a day is judged once it ended
     restart = conn.execute("SELECT MAX(time_s) FROM parameters WHERE source = 'prior' AND "
                            "time_s < ?", (until,)).fetchone()[0]
     since = until - PARAMETER_WINDOW_S if restart is None else \
         max(until - PARAMETER_WINDOW_S, float(restart))
     n = len(PARAMETER_NAMES)
-    rows = np.array(conn.execute(
-        f"SELECT time_s, {', '.join(PARAMETER_NAMES)}, {', '.join(PARAMETER_SD_COLUMNS)} "
-        "FROM parameters WHERE source = 'online' AND time_s >= ? AND time_s < ? "
-        "ORDER BY time_s", (since, until)).fetchall(), float).reshape(-1, 1 + 2 * n)
+    stored = conn.execute(
+        f"SELECT time_s, {', '.join(PARAMETER_NAMES)}, {', '.join(PARAMETER_SD_COLUMNS)}, "
+        "other FROM parameters WHERE source = 'online' AND time_s >= ? AND time_s < ? "
+        "ORDER BY time_s", (since, until)).fetchall()
+    rows = np.array([r[:-1] for r in stored], float).reshape(-1, 1 + 2 * n)
     series = {}
     for i, name in enumerate(PARAMETER_NAMES):
         value = rows[:, 1 + i]
         if name not in LINEAR_NAMES:  # the fitting coordinate, in which the sd is given
             value = np.log(np.where(value > 0, value, np.nan))
         series[name] = daily_estimates(rows[:, 0], value, rows[:, 1 + n + i])
+    others = [_offsets(r[-1]) for r in stored]
+    floor = np.full(len(stored), OFFSET_SD_FLOOR_WM2)
+    for name in OFFSET_NAMES:
+        value = np.array([o.get(name, math.nan) for o in others], float)
+        series[name] = daily_estimates(rows[:, 0], value, floor)
     if max(t.size for t, _, _ in series.values()) < PARAMETER_MIN_DAYS:
         return None
     return series
+
+
+def _offsets(other: str | None) -> dict[str, float]:
+    """The heat-flux offsets of a row's ``other`` JSON (those that are numbers)."""
+    try:
+        values = json.loads(other or "{}")
+    except ValueError:
+        return {}
+    if not isinstance(values, dict):
+        return {}
+    return {k: float(v) for k, v in values.items()
+            if k in OFFSET_NAMES and isinstance(v, int | float)}

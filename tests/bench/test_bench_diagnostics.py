@@ -135,6 +135,17 @@ def test_the_cli_refuses_an_unknown_season_or_scenario_naming_it(args: list[str]
     assert done.returncode == 2 and message in done.stderr, done.stderr
 
 
+def test_a_recheck_of_a_folder_without_kept_runs_is_an_error_naming_it(tmp_path: Path) -> None:
+    """Not an empty table and exit 0: the operator mistyped the folder or the seeds."""
+    (tmp_path / "winter.screen.seed2").mkdir()  # another seed's run, and no database
+    done = subprocess.run(dsfd_command("bench", "diagnostics", "--seeds", "1", "--seasons",
+                                       "winter", "--scenarios", "screen", "--recheck",
+                                       str(tmp_path)),
+                          cwd=ROOT, capture_output=True, text=True, timeout=120, check=False)
+    assert done.returncode == 2, done.stdout
+    assert f"--recheck {tmp_path}: no kept run" in done.stderr, done.stderr
+
+
 def test_the_diagnostics_options_are_refused_by_other_targets() -> None:
     done = subprocess.run(dsfd_command("bench", "model", "--scenarios", "clean"), cwd=ROOT,
                           capture_output=True, text=True, timeout=120, check=False)

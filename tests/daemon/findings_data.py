@@ -51,12 +51,23 @@ def write_database(tmp_path: Path, t: np.ndarray, readings: dict[str, np.ndarray
     return db
 
 
-def residual_database(tmp_path: Path) -> Path:
+def residual_database(tmp_path: Path, *, new_control: bool = False,
+                      record_control: bool = False) -> Path:
     """Seven days of cycles: predictions follow a daily cycle, readings are the prediction
-    plus AR(1) noise (0.3 K or 0.02 m/s sd), and x3 reads 1 K high from day 6.5 on."""
+    plus AR(1) noise (0.3 K or 0.02 m/s sd), and x3 reads 1 K high from day 6.5 on.
+
+    ``new_control``: instead of the x3 step, from day 6.5 for three hours the controller
+    applies regime 2, never used before (regime 7 from 07:00 to 17:00 of the day, else 1),
+    under which the model's x2 is 1.5 K too high (its form error, not a change of the
+    façade). ``record_control``: the ``model`` table holds the applied regime
+    (``applied_afr``), as the daemon writes it."""
     rng = np.random.default_rng(7)
     n = int(DAYS * 86400 / STEP_S)
     t = T0 + np.arange(n) * STEP_S
+    hour = (t - T0) / 3600.0 % 24.0
+    regime = np.where((hour >= 7.0) & (hour < 17.0), 7.0, 1.0)
+    unusual = (t >= STEP_AT) & (t < STEP_AT + 3 * 3600.0) if new_control else np.zeros(n, bool)
+    regime[unusual] = 2.0
     readings, predictions = {}, {}
     for name in OUTPUTS:
         sd = 0.02 if name == "v_cav_ms" else 0.3
@@ -65,8 +76,10 @@ def residual_database(tmp_path: Path) -> Path:
         for i in range(1, n):  # AR(1), phi 0.5: correlated like one-step errors are
             noise[i] = 0.5 * noise[i - 1] + rng.normal(0, sd * np.sqrt(1 - 0.25))
         readings[name] = pred + noise + (np.where(t >= STEP_AT, 1.0, 0.0)
-                                         if name == "x3_c" else 0.0)
-        predictions[f"pred_{name}"] = pred
+                                         if name == "x3_c" and not new_control else 0.0)
+        predictions[f"pred_{name}"] = pred + (1.5 * unusual if name == "x2_c" else 0.0)
+    if record_control:
+        predictions["applied_afr"] = regime
     return write_database(tmp_path, t, readings, predictions)
 
 

@@ -50,6 +50,23 @@ def test_the_check_finds_a_residual_step_after_it_started_and_names_that_output(
         conn.close()
 
 
+@pytest.mark.parametrize("recorded", [False, True])
+def test_a_control_never_used_at_that_hour_is_no_residual_finding(tmp_path, recorded):
+    """Three hours of a regime the controller had not used before, under which the model's
+    x2 is 1.5 K off: judged against the same hours' blocks of the usual regime it looks
+    like a change of the façade; the stored applied regime (``model.applied_afr``) keeps it
+    to blocks of its own kind, of which there are none."""
+    db = residual_database(tmp_path, new_control=True, record_control=recorded)
+    stage = FindingsStage(db, run_id=lambda: 1)
+    conn = sqlite3.connect(db)
+    try:
+        opened = stage.check(conn, T0 + DAYS * 86400.0).opened
+    finally:
+        conn.close()
+    signals = [f.evidence[0].signal for f in opened]
+    assert signals == ([] if recorded else ["residual:x2_c"])
+
+
 @pytest.mark.parametrize("step_k", [0.0, 1.5])
 def test_the_night_check_finds_a_thermocouple_step_on_the_exterior_pane(tmp_path, step_k):
     """Three weeks of 10-min cycles in Suwon: the exterior pane sits 0.5 ± 0.3 K (night to

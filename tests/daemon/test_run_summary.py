@@ -20,7 +20,7 @@ import pytest
 from dsfd.config import load_panel
 from dsfd.config.panel import PARAMETER_NAMES
 from dsfd.control.stake import energy_at_stake
-from dsfd.daemon.stake import with_stake
+from dsfd.daemon.stake import stake_record, with_stake
 from dsfd.daemon.summary import REGIME_NAMES
 from dsfd.estimation.diagnostics import Evidence, Finding
 from dsfd.estimation.params import FIT_NAMES
@@ -117,7 +117,8 @@ def test_a_parameter_finding_on_the_stored_run_gets_the_energy_at_stake(run, tmp
     f = Finding(kind="parameter_shift", confidence=0.6, start_s=t_online, detected_s=now_s,
                 evidence=(ev,), action="the calibrated f has risen")
     with sqlite3.connect(db) as conn:
-        costed = with_stake(conn, f, now_s, panel=cfg, state_dir=state)
+        costed = with_stake(conn, f, now_s, panel=cfg,
+                            steps=stake_record(cfg, state, now_s))
     assert costed.evidence[:1] == (ev,) and len(costed.evidence) == 2
     stake = costed.evidence[1]
     assert stake.signal == "energy_at_stake" and stake.unit == "kWh/week"

@@ -13,10 +13,12 @@ from dsfd.config.panel import PARAMETER_NAMES
 from dsfd.estimation.parameter_watch import (
     DAY_MIN_SPAN_S,
     LOG_UNIT,
+    OFFSET_UNIT,
     PARAMETER_MEANING,
     daily_estimates,
     parameter_action,
 )
+from dsfd.estimation.params import OFFSET_NAMES
 
 DAY = 86400.0
 MIDNIGHT = 19675 * DAY
@@ -62,15 +64,19 @@ def test_short_days_and_estimates_without_an_sd_are_left_out():
 
 
 def test_every_parameter_has_a_meaning_in_each_direction():
-    assert set(PARAMETER_MEANING) == set(PARAMETER_NAMES)
+    assert set(PARAMETER_MEANING) == set(PARAMETER_NAMES) | set(OFFSET_NAMES)
+    for name in OFFSET_NAMES:  # a heat-flux offset: told in W/m2, its sensor first
+        up = parameter_action(name, side=1, shift=17.0, shift_sd=8.0, unit=OFFSET_UNIT)
+        assert up.startswith(f"{name} has risen by 17 W/m2 (8.0 sd of its daily spread): ")
+        assert f"first check its sensor x{name[-1]}" in up
     for name in PARAMETER_NAMES:
         up = parameter_action(name, side=1, shift=0.7, shift_sd=4.0, unit=LOG_UNIT)
         down = parameter_action(name, side=-1, shift=-0.7, shift_sd=-4.0, unit=LOG_UNIT)
-        assert up.startswith(f"{name} has risen ×2.01 (4.0 posterior sd): ")
-        assert down.startswith(f"{name} has fallen ×0.50 (4.0 posterior sd): ")
+        assert up.startswith(f"{name} has risen ×2.01 (4.0 sd of its daily spread): ")
+        assert down.startswith(f"{name} has fallen ×0.50 (4.0 sd of its daily spread): ")
         assert up != down
     assert parameter_action("n", side=1, shift=0.08, shift_sd=3.0).startswith(
-        "n has risen by 0.08 (3.0 posterior sd)")
+        "n has risen by 0.08 (3.0 sd of its daily spread)")
 
 
 def test_the_air_path_parameters_agree_on_what_more_resistance_is():
@@ -89,5 +95,5 @@ def test_causes_the_evidence_cannot_separate_are_named_together():
     assert "cannot tell" in PARAMETER_MEANING["h_ca1"][-1]
     assert "x4" in PARAMETER_MEANING["h_ca2"][1]
     # an unknown parameter still gets an action, naming it
-    assert parameter_action("q_x1", side=1, shift=5.0, shift_sd=3.0, unit="W/m2").startswith(
-        "the calibrated q_x1 has risen by 5 W/m2")
+    assert parameter_action("h_x9", side=1, shift=5.0, shift_sd=3.0, unit="W/m2").startswith(
+        "the calibrated h_x9 has risen by 5 W/m2")

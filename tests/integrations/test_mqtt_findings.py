@@ -51,10 +51,10 @@ START = "2022-01-01T23:30:00Z"  # 08:30 in Suwon, January (as the stuck-damper d
 PANEL = "suwon-south"
 BASE = f"dsfd/{PANEL}"
 TOPIC = f"{BASE}/finding/damper_no_flow"
-#: Hang guards [s]: the finding needs about 100 cycles (25 s paced) after the start.
+#: Hang guards [s]: the finding needs about 105 cycles (26 s paced) after the start.
 FIND_LIMIT_S = 150.0
 POLL_LIMIT_S = 60.0
-CYCLES = 190
+CYCLES = 200
 SPEED = 480.0
 STUCK = "damper-stuck.IT:+30min:0"
 
