@@ -73,8 +73,9 @@ class Scenario:
 NAMES: dict[str, tuple[tuple[str, str | None], ...]] = {
     "stuck-damper": (("damper_no_flow", None),),
     "louver-slip": (),
-    "tc-offset": (("residual_shift", "residual:x3_c"),),
-    "tc-drift": (("residual_shift", "residual:x3_c"),),
+    # the inner pane's heat-flux offset: its action names the sensor x3 first
+    "tc-offset": (("residual_shift", "residual:x3_c"), ("parameter_shift", "parameter:q_x3")),
+    "tc-drift": (("residual_shift", "residual:x3_c"), ("parameter_shift", "parameter:q_x3")),
     "soiling": (),
     "screen": (("parameter_shift", "parameter:f"),),
 }

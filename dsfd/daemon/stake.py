@@ -1,10 +1,12 @@
 """The energy at stake of a parameter finding, from what the daemon stored
 (docs/model.md#energy-at-stake).
 
-A ``parameter_shift`` finding says that one calibrated parameter moved; this adds what the
-move costs: :func:`dsfd.control.stake.energy_at_stake` over the last :data:`STAKE_WINDOW_S`
-of stored cycles (the weather readings and the commands applied, read as ``dsfd export``
-reads them), with θ now against θ now with that one parameter at its value before the
+A ``parameter_shift`` finding of a θ parameter says that one heat or air path of the façade
+moved; this adds what the move costs (a heat-flux offset's finding names a sensor first, and a
+sensor reading off changes no heat path, so it gets none):
+:func:`dsfd.control.stake.energy_at_stake` over the last :data:`STAKE_WINDOW_S` of stored
+cycles (the weather readings and the commands applied, read as ``dsfd export`` reads them),
+with θ now against θ now with that one parameter at its value before the
 change. The result joins the finding as one more piece of evidence (signal
 ``energy_at_stake``, kWh per week) and a sentence of its action.
 
@@ -26,7 +28,7 @@ import numpy as np
 from dsfd.config.panel import PanelConfig
 from dsfd.control.stake import EnergyAtStake, energy_at_stake
 from dsfd.estimation.diagnostics import Evidence, Finding
-from dsfd.estimation.params import FIT_NAMES
+from dsfd.estimation.params import FIT_NAMES, OFFSET_NAMES
 from dsfd.estimation.stepdata import StepData, model_config, step_data
 from dsfd.measured import MeasuredDataError
 from dsfd.physics.model import LumpedModel
@@ -71,7 +73,7 @@ def _stake(conn: sqlite3.Connection, f: Finding, now_s: float, panel: PanelConfi
            steps: StepData) -> EnergyAtStake | None:
     name = f.evidence[0].signal.removeprefix("parameter:")
     now, before = theta_at(conn, now_s), theta_at(conn, f.start_s, before=True)
-    if now is None or before is None or name not in FIT_NAMES:
+    if now is None or before is None or name not in FIT_NAMES or name in OFFSET_NAMES:
         return None
     changed = now.copy()
     i = FIT_NAMES.index(name)

@@ -120,9 +120,11 @@ def _caption(row: Mapping[str, Any]) -> str:
     elif kind == "parameter_shift":
         what = ("Each on-line estimate of the parameter and the daily values the detector "
                 "judges (the precision-weighted mean of the day's estimates) ± the posterior "
-                "sd stored with them, against the level of the days before the start; an "
-                "energy at stake in the evidence is the model's J over the last week with the "
-                "parameter before and now.")
+                "sd stored with them (a heat-flux offset q_x: the fixed sd it is given), "
+                "against the level of the days before the start; the detector's spread adds "
+                "the day-to-day wander of those days. An energy at stake in the evidence is "
+                "the model's J over the last week with the parameter before and now (not "
+                "for an offset, which names a sensor first).")
     else:
         what = ("Each reading of the cavity speed with the dampers the command in force "
                 "during that step opened (the day the latest check judged), and the commanded "

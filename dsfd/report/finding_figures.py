@@ -301,7 +301,7 @@ def parameter_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h:
         level = float(physical(np.sum(w * z_day[before]) / np.sum(w)))
         ax.plot(ax_t.local(np.array([mid[before][0], float(row["start_s"])])),
                 [level, level], color="black", ls="--", lw=1.1,
-                label="precision-weighted level of the days before the start")
+                label="level of the days before the start")
     unit = {f.name: f.metadata.get("unit") for f in dataclasses.fields(Parameters)}.get(
         name, "W/m²" if name in OFFSET_NAMES else None)
     ax.set_ylabel(f"{name}\n[{'-' if unit in (None, '1') else unit}]")

@@ -99,6 +99,20 @@ def test_a_louver_slip_is_timed_in_minutes_of_sun_and_has_no_naming_kind_yet(
     assert fig["false_findings"] == 0.0
 
 
+@pytest.mark.parametrize(("kind", "subject", "named"), [
+    ("parameter_shift", "parameter:q_x3", True),   # the inner pane's heat-flux offset
+    ("parameter_shift", "parameter:q_x2", False),  # another pane's
+    ("parameter_shift", "parameter:h_in", False),
+])
+def test_a_thermocouple_offset_is_named_by_its_panes_heat_flux_offset(
+        tmp_path: Path, kind: str, subject: str, named: bool) -> None:
+    n = 300
+    db = _database(tmp_path, n=n, afr=[10] * n, or_pct=[0.0] * n, ghi=[0.0] * n,
+                   findings=[(kind, subject, 250 * MIN)])
+    fig = score(db, _scenario("tc-offset", onset_s=100 * MIN))
+    assert fig["named"] == float(named)
+
+
 def test_a_thermocouple_step_is_named_by_its_own_residual_only(tmp_path: Path) -> None:
     n = 300
     db = _database(tmp_path, n=n, afr=[10] * n, or_pct=[0.0] * n, ghi=[0.0] * n,

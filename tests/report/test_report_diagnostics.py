@@ -203,7 +203,7 @@ def test_a_parameter_finding_is_drawn_with_its_daily_values_and_the_level_before
     ax = fig.axes[0]
     assert ax.get_yscale() == "log" and "f" in ax.get_ylabel()
     lines = _lines(fig, 0.0)
-    _, (level, _) = lines["precision-weighted level of the days before the start"]
+    _, (level, _) = lines["level of the days before the start"]
     assert 0.8 * DEFAULTS["f"] < level < 1.25 * DEFAULTS["f"]
     daily = next(c for c in ax.containers).lines[0]  # the error bars' points
     t = np.asarray(daily.get_xdata()).astype("datetime64[ms]").astype("int64") / 1e3
@@ -212,3 +212,27 @@ def test_a_parameter_finding_is_drawn_with_its_daily_values_and_the_level_before
     marks = {ln.get_label(): ln.get_xdata()[0] for ln in ax.get_lines()
              if ln.get_label() in ("start", "detected")}
     assert set(marks) == {"start", "detected"}
+
+
+def test_a_heat_flux_offset_finding_is_drawn_in_w_per_m2_from_the_stored_offsets(tmp_path):
+    """q_x3 +15 W/m2 from the 15th day (an inner-pane thermocouple reading high): the figure
+    reads the on-line offsets from the rows' JSON, draws them on a linear W/m2 axis, the
+    level before near 0 (the synthetic history's wander of about 1 W/m2) and the daily
+    values after about 15 W/m2 above it."""
+    from dsfd.report.finding_figures import parameter_figure
+    from tests.daemon.test_parameter_findings import SHIFT_AT, _checks, _parameter_history
+
+    db = _parameter_history(tmp_path, shift={"q_x3": 15.0})
+    _checks(db)
+    with sqlite3.connect(db) as conn:
+        rows = [r for r in findings_between(conn, 0.0, 1e12) if r["kind"] == "parameter_shift"]
+        assert [r["subject"] for r in rows] == ["parameter:q_x3"]
+        fig = parameter_figure(conn, rows[0], 0.0)
+    ax = fig.axes[0]
+    assert ax.get_yscale() == "linear" and "W/m²" in ax.get_ylabel()
+    _, (level, _) = _lines(fig, 0.0)["level of the days before the start"]
+    assert abs(level) < 1.5
+    estimates = next(ln for ln in ax.get_lines() if ln.get_label() == "each on-line estimate")
+    t = np.asarray(estimates.get_xdata()).astype("datetime64[ms]").astype("int64") / 1e3
+    late = np.asarray(estimates.get_ydata(), float)[t > SHIFT_AT + 86400.0]
+    assert late.size > 24 and abs(np.median(late) - level - 15.0) < 2.0
