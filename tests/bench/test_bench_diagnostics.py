@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from dsfd.bench.diagnostics import NAMES, Scenario, report, scenarios, score
+from dsfd.bench.diagnostics import Scenario, report, scenarios, score
 from dsfd.storage.timeseries import Store
 from tests.daemon.harness import ROOT, dsfd_command
 
@@ -86,15 +86,14 @@ def test_a_closed_damper_opening_does_not_count_and_a_finding_on_another_damper_
     assert fig["detect_delay_min"] == 0.0 and fig["observed_min"] == 0.0
 
 
-def test_a_louver_slip_is_timed_in_minutes_of_sun_and_has_no_naming_kind_yet(
+def test_a_louver_slip_is_timed_in_minutes_of_sun_and_named_by_the_louver_parameters(
         tmp_path: Path) -> None:
     n = 200
     ghi = [500.0 if 50 <= c < 100 else 50.0 for c in range(n)]  # 50 min of sun
     db = _database(tmp_path, n=n, afr=[10] * n, or_pct=[0.0] * n, ghi=ghi,
                    findings=[("residual_shift", "residual:x2_c", 150 * MIN)])
     fig = score(db, _scenario("louver-slip", onset_s=20 * MIN))
-    assert NAMES["louver-slip"] == ()
-    assert fig["detected"] == 1.0 and fig["named"] == 0.0
+    assert fig["detected"] == 1.0 and fig["named"] == 0.0  # a pane's residual names no slip
     assert fig["detect_delay_min"] == 50.0 and fig["observed_min"] == 50.0
     assert fig["false_findings"] == 0.0
 
@@ -165,3 +164,15 @@ def test_the_diagnostics_options_are_refused_by_other_targets() -> None:
                           capture_output=True, text=True, timeout=120, check=False)
     assert done.returncode == 2
     assert "--scenarios only applies to the diagnostics target" in done.stderr
+
+
+@pytest.mark.parametrize(("subject", "named"), [("parameter:q_x4", True),
+                                                 ("parameter:h_ca2", True),
+                                                 ("parameter:q_x1", False)])
+def test_a_louver_slip_is_named_by_a_louver_parameter(tmp_path: Path, subject: str,
+                                                        named: bool) -> None:
+    n = 200
+    db = _database(tmp_path, n=n, afr=[10] * n, or_pct=[0.0] * n, ghi=[500.0] * n,
+                   findings=[("parameter_shift", subject, 150 * MIN)])
+    fig = score(db, _scenario("louver-slip", onset_s=20 * MIN))
+    assert fig["named"] == float(named)
