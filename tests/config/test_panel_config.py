@@ -140,6 +140,34 @@ def test_duplicate_keys_and_bad_yaml_are_errors(tmp_path: Path):
         load_panel(broken)
 
 
+def test_check_config_run_makes_the_checks_of_dsfd_run_in_that_mode(tmp_path: Path):
+    """A file that passes ``check-config --run MODE`` starts in that mode, and one that fails
+    fails ``dsfd run`` the same way: here the stage budgets do not fit into the cycle, and a
+    panel without devices cannot run against hardware."""
+    tight = tmp_path / "tight.yaml"
+    d = _suwon_dict()
+    d.setdefault("daemon", {})["calibrate_budget_s"] = 59.0
+    tight.write_text(yaml.safe_dump(d))
+    no_devices = PANELS / "suwon-south-no-louver.yaml"
+
+    def dsfd(*args: str) -> subprocess.CompletedProcess:
+        return subprocess.run([sys.executable, "-m", "dsfd", *args], capture_output=True,
+                              text=True, timeout=120)
+
+    plain = dsfd("check-config", str(tight))
+    assert plain.returncode == 0  # the file alone is valid
+    checked = dsfd("check-config", "--run", "sim", str(tight))
+    assert checked.returncode == 2
+    assert "daemon.cycle_period_s" in checked.stderr and "stage budgets" in checked.stderr
+    run = dsfd("run", "--config", str(tight), "--plant", "sim", "--dry-run", "--cycles", "1")
+    assert run.returncode == 2 and "stage budgets" in run.stderr
+    assert dsfd("check-config", "--run", "sim", str(no_devices)).returncode == 0
+    hw = dsfd("check-config", "--run", "hardware", str(no_devices))
+    assert hw.returncode == 2 and "required to run against hardware" in hw.stderr
+    assert dsfd("check-config", "--run", "hardware",
+                str(PANELS / "suwon-south.yaml")).returncode == 0
+
+
 def test_check_config_cli(tmp_path: Path):
     bad = tmp_path / "bad.yaml"
     d = _suwon_dict()
