@@ -18,12 +18,14 @@ scenarios run one after another and ``on_figures`` gets the figures after each;
 
 from __future__ import annotations
 
+import signal
 import sqlite3
 import subprocess
 import sys
 import tempfile
 from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
+from typing import IO
 
 import numpy as np
 import yaml
@@ -87,11 +89,37 @@ def _run(config: Path, scenario: Scenario, *, seed: int, weather: str | None, st
     state.mkdir(parents=True, exist_ok=True)
     log = state / "run.log"
     with log.open("w") as out:
-        rc = subprocess.run(args, stdout=out, stderr=subprocess.STDOUT, check=False).returncode
+        rc = _run_child(args, out)
     if rc != 0:
         raise RuntimeError(f"dsfd run for {scenario.name} (seed {seed}) exited {rc}; "
                            f"its log: {log}")
     return state / "timeseries.sqlite"
+
+
+def _run_child(args: list[str], out: IO[str]) -> int:
+    """Run ``args`` to its end; its exit code. A SIGTERM to the bench (or Ctrl-C) is passed
+    on to the run, which stops after its cycle, and then stops the bench: a stopped bench
+    leaves no daemon behind."""
+    child = subprocess.Popen(args, stdout=out, stderr=subprocess.STDOUT)
+    stopped = False
+
+    def stop(_signum: int, _frame: object) -> None:
+        nonlocal stopped
+        stopped = True
+        child.terminate()
+
+    previous = signal.signal(signal.SIGTERM, stop)
+    try:
+        rc = child.wait()
+    except KeyboardInterrupt:
+        stopped = True
+        child.terminate()
+        rc = child.wait()
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    if stopped:
+        raise KeyboardInterrupt(f"stopped; the run ended with exit code {rc}")
+    return rc
 
 
 def bench_diagnostics(config: Path, *, seeds: Sequence[int], seasons: Sequence[str] = SEASONS,

@@ -9,8 +9,10 @@ the delay in the target's unit (minutes that used the stuck damper, minutes of s
 from __future__ import annotations
 
 import dataclasses
+import signal
 import sqlite3
 import subprocess
+import time
 from pathlib import Path
 
 import pytest
@@ -157,6 +159,43 @@ def test_a_recheck_of_a_folder_without_kept_runs_is_an_error_naming_it(tmp_path:
                           cwd=ROOT, capture_output=True, text=True, timeout=120, check=False)
     assert done.returncode == 2, done.stdout
     assert f"--recheck {tmp_path}: no kept run" in done.stderr, done.stderr
+
+
+def test_a_stopped_bench_leaves_no_daemon_behind(tmp_path: Path) -> None:
+    """SIGTERM to the bench while its ``dsfd run`` runs: the run is stopped too (it was left
+    running on its own, writing to a folder the operator then deleted), and the bench says
+    it was interrupted."""
+    keep = tmp_path / "k"
+    bench = subprocess.Popen(dsfd_command("bench", "diagnostics", "--seeds", "1,", "--seasons",
+                                          "winter", "--scenarios", "clean", "--days", "1",
+                                          "--keep-state", str(keep)),
+                             cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                             text=True)
+    db = keep / "winter.clean.seed1" / "timeseries.sqlite"
+    try:
+        deadline = time.monotonic() + 120.0
+        while not _has_cycles(db):  # the daemon is running and storing cycles
+            assert bench.poll() is None and time.monotonic() < deadline, bench.stderr
+            time.sleep(0.2)
+        bench.send_signal(signal.SIGTERM)
+        _, err = bench.communicate(timeout=60)
+    finally:
+        if bench.poll() is None:
+            bench.kill()
+    assert bench.returncode == 130 and "interrupted" in err, err
+    left = subprocess.run(["pgrep", "-f", str(db.parent)], capture_output=True, text=True,
+                          check=False)
+    assert left.stdout.strip() == "", left.stdout
+
+
+def _has_cycles(db: Path) -> bool:
+    if not db.exists():
+        return False
+    try:
+        with sqlite3.connect(f"file:{db}?mode=ro", uri=True) as conn:
+            return conn.execute("SELECT COUNT(*) FROM decisions").fetchone()[0] > 0
+    except sqlite3.Error:
+        return False
 
 
 def test_the_diagnostics_options_are_refused_by_other_targets() -> None:
