@@ -160,7 +160,8 @@ class OnlineCalibrator:
                 prior_cov=prior_cov, free=free, loss=cfg.loss, f_scale=cfg.f_scale,
                 prior_weight=cfg.prior_weight, max_nfev=max_nfev or cfg.max_nfev,
                 broyden=cfg.broyden_updates, adaptive_scales=cfg.adaptive_scales,
-                determined_sd_ratio=cfg.identifiability_sd_ratio)
+                determined_sd_ratio=cfg.identifiability_sd_ratio,
+                always_fit=np.isin(FIT_NAMES, cfg.identifiability_always_fit))
         except (np.linalg.LinAlgError, ValueError, FloatingPointError) as exc:
             self.state = dataclasses.replace(st, failed_updates=st.failed_updates + 1)
             return UpdateReport(self.state, None, f"fit failed: {exc}")

@@ -133,6 +133,7 @@ def fit_window(problem: WindowProblem, space: ParameterSpace, *, prior_z: np.nda
                prior_cov: np.ndarray, free: np.ndarray, loss: str, f_scale: float,
                prior_weight: float, max_nfev: int, broyden: int = 0,
                adaptive_scales: bool = False, determined_sd_ratio: float = 1.0,
+               always_fit: np.ndarray | None = None,
                progress: Callable[[int, int, float], None] | None = None) -> FitResult:
     """Fit the free parameters of θ on one window.
 
@@ -160,6 +161,8 @@ def fit_window(problem: WindowProblem, space: ParameterSpace, *, prior_z: np.nda
         (:meth:`WindowProblem.rescaled`) before fitting.
     determined_sd_ratio : float
         Fit only the free parameters the window determines (module Notes); 1 fits them all.
+    always_fit : array (9,) or (13,), bool, optional
+        Free parameters fitted whether the window determines them or not.
     progress : callable (nfev, max_nfev, cost), optional
         Called after every residual evaluation.
 
@@ -174,7 +177,8 @@ def fit_window(problem: WindowProblem, space: ParameterSpace, *, prior_z: np.nda
     if adaptive_scales:
         objective.rescale()
     if determined_sd_ratio < 1.0 and objective.idx.size and objective.problem.n_residuals:
-        objective = objective.restricted_to_determined(determined_sd_ratio)
+        objective = objective.restricted_to_determined(determined_sd_ratio,
+                                                       always=always_fit)
     problem, idx, x0 = objective.problem, objective.idx, objective.x0
     if idx.size == 0 or problem.n_residuals == 0:
         r0 = objective.residuals(x0) if idx.size else np.zeros(0)
@@ -229,9 +233,11 @@ class _WindowObjective:
         self._jac: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None  # J, x, r
         self._since_fd = broyden
 
-    def restricted_to_determined(self, ratio: float) -> _WindowObjective:
-        """The objective over the free parameters that the window determines (module Notes),
-        with the start point's Jacobian carried over; ``self`` if it determines them all."""
+    def restricted_to_determined(self, ratio: float, *, always: np.ndarray | None = None
+                                 ) -> _WindowObjective:
+        """The objective over the free parameters that the window determines (module Notes)
+        and those in ``always``, with the start point's Jacobian carried over; ``self`` if
+        it keeps them all."""
         x0, m = self.x0, self.problem.n_residuals
         out = self.residuals(x0)
         j_data = self.jacobian(x0)[:m]
@@ -241,6 +247,8 @@ class _WindowObjective:
         prior_sd = self.space.prior_sd[self.idx]
         post = np.linalg.inv(info + np.diag(1.0 / prior_sd ** 2))
         keep = np.sqrt(np.clip(np.diag(post), 0.0, None)) < ratio * prior_sd
+        if always is not None:
+            keep |= np.asarray(always, bool)[self.idx]
         if keep.all():
             return self
         free = self.free.copy()
