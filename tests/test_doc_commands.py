@@ -52,6 +52,7 @@ SKIP_REASONS = {
     "the test suite itself",
     "needs the panel's devices",
     "takes hours of CPU (the plant oracle)",
+    "takes hours of CPU (six cases, four runs each)",
 }
 #: The README's first two blocks (no marker line above them; see the module docstring).
 README_TOP = ('replace "--cycles 540" "--cycles 20"', "skip: the test suite itself")
