@@ -186,20 +186,9 @@ def test_a_parameter_finding_is_drawn_with_its_daily_values_and_the_level_before
     the figure's daily values after the start sit about twice the drawn level before it,
     the level within the days' wander of the synthetic truth (f = 100), and its marks are
     the stored start and detection."""
-    from dsfd.report.finding_figures import parameter_figure
-    from tests.daemon.test_parameter_findings import (
-        DEFAULTS,
-        SHIFT_AT,
-        _checks,
-        _parameter_history,
-    )
+    from tests.daemon.test_parameter_findings import DEFAULTS, SHIFT_AT
 
-    db = _parameter_history(tmp_path, shift={"f": float(np.log(2.0))})
-    _checks(db)
-    with sqlite3.connect(db) as conn:
-        rows = [r for r in findings_between(conn, 0.0, 1e12) if r["kind"] == "parameter_shift"]
-        assert [r["subject"] for r in rows] == ["parameter:f"]
-        fig = parameter_figure(conn, rows[0], 0.0)
+    fig = _drawn_parameter_finding(tmp_path, "f", float(np.log(2.0)))
     ax = fig.axes[0]
     assert ax.get_yscale() == "log" and "f" in ax.get_ylabel()
     lines = _lines(fig, 0.0)
@@ -219,15 +208,9 @@ def test_a_heat_flux_offset_finding_is_drawn_in_w_per_m2_from_the_stored_offsets
     reads the on-line offsets from the rows' JSON, draws them on a linear W/m2 axis, the
     level before near 0 (the synthetic history's wander of about 1 W/m2) and the daily
     values after about 15 W/m2 above it."""
-    from dsfd.report.finding_figures import parameter_figure
-    from tests.daemon.test_parameter_findings import SHIFT_AT, _checks, _parameter_history
+    from tests.daemon.test_parameter_findings import SHIFT_AT
 
-    db = _parameter_history(tmp_path, shift={"q_x3": 15.0})
-    _checks(db)
-    with sqlite3.connect(db) as conn:
-        rows = [r for r in findings_between(conn, 0.0, 1e12) if r["kind"] == "parameter_shift"]
-        assert [r["subject"] for r in rows] == ["parameter:q_x3"]
-        fig = parameter_figure(conn, rows[0], 0.0)
+    fig = _drawn_parameter_finding(tmp_path, "q_x3", 15.0)
     ax = fig.axes[0]
     assert ax.get_yscale() == "linear" and "W/m²" in ax.get_ylabel()
     _, (level, _) = _lines(fig, 0.0)["level of the days before the start"]
@@ -236,3 +219,18 @@ def test_a_heat_flux_offset_finding_is_drawn_in_w_per_m2_from_the_stored_offsets
     t = np.asarray(estimates.get_xdata()).astype("datetime64[ms]").astype("int64") / 1e3
     late = np.asarray(estimates.get_ydata(), float)[t > SHIFT_AT + 86400.0]
     assert late.size > 24 and abs(np.median(late) - level - 15.0) < 2.0
+
+
+def _drawn_parameter_finding(tmp_path, name: str, shift: float):
+    """The figure of the one parameter finding the daemon's checks open on a synthetic
+    history with ``shift`` added to ``name`` from the 15th day
+    (tests/daemon/test_parameter_findings)."""
+    from dsfd.report.finding_figures import parameter_figure
+    from tests.daemon.test_parameter_findings import _checks, _parameter_history
+
+    db = _parameter_history(tmp_path, shift={name: shift})
+    _checks(db)
+    with sqlite3.connect(db) as conn:
+        rows = [r for r in findings_between(conn, 0.0, 1e12) if r["kind"] == "parameter_shift"]
+        assert [r["subject"] for r in rows] == [f"parameter:{name}"]
+        return parameter_figure(conn, rows[0], 0.0)
