@@ -23,7 +23,7 @@ Every :data:`NIGHT_EVERY_S`, once :data:`NIGHT_MIN_S` of history is stored, it a
 :data:`NIGHT_WINDOW_S` (readings with the sun 6° below the horizon that had it below the
 horizon two hours before).
 
-Every :data:`PARAMETER_EVERY_S` it runs :func:`~dsfd.estimation.diagnostics.parameter_change`
+Every :data:`PARAMETER_EVERY_S` it runs :func:`~dsfd.estimation.parameter_shift.parameter_change`
 per θ parameter and heat-flux offset on its on-line estimates of the last
 :data:`PARAMETER_WINDOW_S` of complete UTC days since the calibration last started from its
 priors, each with the posterior sd stored with it (schema 8; in the fitting coordinates, ln θ
@@ -52,13 +52,9 @@ from dsfd.config.panel import PanelConfig
 from dsfd.daemon.logging_setup import get_logger
 from dsfd.daemon.stake import stake_record, with_stake
 from dsfd.estimation.crosschecks import cavity_flow_check, night_pane_check
-from dsfd.estimation.diagnostics import (
-    Finding,
-    parameter_change,
-    residual_change,
-    residual_settings,
-)
+from dsfd.estimation.diagnostics import Finding, residual_change, residual_settings
 from dsfd.estimation.lifecycle import Changes, confirmed, reconcile
+from dsfd.estimation.parameter_shift import parameter_change
 from dsfd.storage import findings as table
 from dsfd.storage.evidence import (
     CROSSCHECK_WINDOW_S,

@@ -8,15 +8,17 @@ import numpy as np
 import pytest
 
 from dsfd.estimation.diagnostics import (
-    ParameterSettings,
     ResidualSettings,
-    between_day_variance,
     block_labels,
     block_means,
     page_cusum,
-    parameter_change,
     residual_change,
     residual_settings,
+)
+from dsfd.estimation.parameter_shift import (
+    ParameterSettings,
+    between_day_variance,
+    parameter_change,
 )
 
 DAY = 86400.0
