@@ -50,7 +50,7 @@ from pathlib import Path
 
 from dsfd.config.panel import PanelConfig
 from dsfd.daemon.logging_setup import get_logger
-from dsfd.daemon.stake import stake_record, with_stake
+from dsfd.daemon.stake import costed, stake_record, with_stake
 from dsfd.estimation.crosschecks import cavity_flow_check, night_pane_check
 from dsfd.estimation.diagnostics import Finding, residual_change, residual_settings
 from dsfd.estimation.lifecycle import Changes, confirmed, reconcile
@@ -263,10 +263,10 @@ class FindingsStage:
         found, judged = detect(conn, now_s, residuals="residual" in due,
                                night=self.night if "night" in due else None,
                                parameters="parameter" in due)
-        if self.panel is not None and any(f.kind == "parameter_shift" for f in found):
+        if self.panel is not None and any(costed(f) for f in found):
             week = stake_record(self.panel, self.database.parent, now_s)
             found = [with_stake(conn, f, now_s, panel=self.panel, steps=week)
-                     if f.kind == "parameter_shift" else f for f in found]
+                     if costed(f) else f for f in found]
         for name, kind in (("residual", "residual_shift"), ("night", "pane_offset_shift"),
                            ("parameter", "parameter_shift")):
             if kind in judged:

@@ -34,7 +34,8 @@ from dsfd.measured import MeasuredDataError
 from dsfd.physics.model import LumpedModel
 from dsfd.storage.history import HistoryError, measured_from_history, read_history
 
-__all__ = ["STAKE_SIGNAL", "STAKE_WINDOW_S", "stake_record", "theta_at", "with_stake"]
+__all__ = ["STAKE_SIGNAL", "STAKE_WINDOW_S", "costed", "stake_record", "theta_at",
+           "with_stake"]
 
 #: The record the stake is costed over: the last week, as the issue asks.
 STAKE_WINDOW_S = 7 * 86400.0
@@ -69,11 +70,18 @@ def stake_record(panel: PanelConfig, state_dir: Path, now_s: float) -> StepData 
     return steps if steps.n_steps >= 2 else None
 
 
+def costed(f: Finding) -> bool:
+    """Whether ``f`` gets an energy at stake: a ``parameter_shift`` of a θ parameter (not of
+    a heat-flux offset, whose action names a sensor first)."""
+    name = f.evidence[0].signal.removeprefix("parameter:") if f.evidence else ""
+    return f.kind == "parameter_shift" and name in FIT_NAMES and name not in OFFSET_NAMES
+
+
 def _stake(conn: sqlite3.Connection, f: Finding, now_s: float, panel: PanelConfig,
            steps: StepData) -> EnergyAtStake | None:
     name = f.evidence[0].signal.removeprefix("parameter:")
     now, before = theta_at(conn, now_s), theta_at(conn, f.start_s, before=True)
-    if now is None or before is None or name not in FIT_NAMES or name in OFFSET_NAMES:
+    if now is None or before is None or not costed(f):
         return None
     changed = now.copy()
     i = FIT_NAMES.index(name)
