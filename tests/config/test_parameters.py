@@ -36,3 +36,9 @@ def test_calibration_fixed_accepts_every_catalogue_name_and_nothing_else():
     assert Calibration(fixed=FIT_NAMES).check() == []
     problems = Calibration(fixed=("h_out", "h_gap")).check()
     assert [(p.key, p.value) for p in problems] == [("fixed", "h_gap")]
+
+
+def test_identifiability_always_fit_accepts_every_catalogue_name_and_nothing_else():
+    assert Calibration(identifiability_always_fit=FIT_NAMES).check() == []
+    problems = Calibration(identifiability_always_fit=("f", "hout")).check()
+    assert [(p.key, p.value) for p in problems] == [("identifiability_always_fit", "hout")]
