@@ -25,13 +25,14 @@ horizon two hours before).
 
 Every :data:`PARAMETER_EVERY_S` it runs :func:`~dsfd.estimation.parameter_shift.parameter_change`
 per θ parameter and heat-flux offset on its on-line estimates of the last
-:data:`PARAMETER_WINDOW_S` of complete UTC days since the calibration last started from its
-priors, each with the posterior sd stored with it (schema 8; in the fitting coordinates, ln θ
-for the positive parameters; the offsets get a fixed sd): one value a day, the
-precision-weighted mean of the day's estimates with the sd of one of them
-(:func:`~dsfd.estimation.parameter_watch.daily_estimates`, read by
+:data:`PARAMETER_WINDOW_S` since the calibration last started from its priors, each with the
+posterior sd stored with it (schema 8; in the fitting coordinates, ln θ for the positive
+parameters; the offsets get a fixed sd): one value a day, the days being the 24 h periods
+that end at the check, the precision-weighted mean of the day's estimates with the sd of one
+of them (:func:`~dsfd.estimation.parameter_watch.daily_estimates`, read by
 :mod:`dsfd.storage.parameter_series`), once :data:`PARAMETER_MIN_DAYS` days make a series.
-A detector that did not run in a check ends none of its findings.
+A detector that did not run in a check ends none of its findings, and a parameter finding
+ends only once the detector has missed it for :data:`PARAMETER_RELEASE_S`.
 
 A parameter finding gets the energy at stake of its change when the stage knows the panel
 (:func:`dsfd.daemon.stake.with_stake`: the model's J over the last week's stored weather and
@@ -50,11 +51,12 @@ from pathlib import Path
 
 from dsfd.config.panel import PanelConfig
 from dsfd.daemon.logging_setup import get_logger
-from dsfd.daemon.stake import costed, stake_record, with_stake
+from dsfd.daemon.stake import StakeCache
 from dsfd.estimation.crosschecks import cavity_flow_check, night_pane_check
 from dsfd.estimation.diagnostics import Finding, residual_change, residual_settings
-from dsfd.estimation.lifecycle import Changes, confirmed, reconcile
+from dsfd.estimation.lifecycle import Changes, confirmed, held_open, reconcile
 from dsfd.estimation.parameter_shift import parameter_change
+from dsfd.estimation.parameter_watch import day_start_s
 from dsfd.storage import findings as table
 from dsfd.storage.evidence import (
     CROSSCHECK_WINDOW_S,
@@ -78,6 +80,7 @@ from dsfd.storage.schema import BUSY_TIMEOUT_MS
 
 __all__ = ["CHECK_EVERY_S", "CROSSCHECK_WINDOW_S", "DAMPER_SHORT", "FLOW_CONFIRM_S",
            "NIGHT_EVERY_S", "NIGHT_MIN_S", "PARAMETER_EVERY_S", "PARAMETER_MIN_DAYS",
+           "PARAMETER_RELEASE_S",
            "PARAMETER_WINDOW_S", "RESIDUAL_EVERY_S", "RESIDUAL_MIN_S", "FindingsStage",
            "NightSite", "detect"]
 
@@ -92,9 +95,18 @@ RESIDUAL_EVERY_S = 3600.0
 #: The night check runs every 6 h (once NIGHT_MIN_S is stored): a night is judged once it
 #: ended.
 NIGHT_EVERY_S = 6 * 3600.0
-#: The parameter detector runs every 6 h (once PARAMETER_MIN_DAYS make a series): a day is
-#: judged once it ended.
-PARAMETER_EVERY_S = 6 * 3600.0
+#: The parameter detector runs every hour (once PARAMETER_MIN_DAYS make a series), each time
+#: on the days of 24 h that end then: a thermocouple 1 K high moves its offset by about 7 sd
+#: of the daily spread, which a day's value shows once nearly all of the day carried it, so
+#: the check must come soon after (every 6 h: 25.1 h on the diagnostics bench, target one
+#: day). A run reads three weeks of parameter rows and costs about 0.1 s of CPU; the energy
+#: at stake, which costs far more, is costed every 6 h (dsfd.daemon.stake.StakeCache).
+PARAMETER_EVERY_S = 3600.0
+#: An open parameter finding ends once the detector has not seen it for a day (the return
+#: delay of estimation.lifecycle.held_open): its days move with each check, and a statistic
+#: near its threshold (a room-side convection fallen ×0.6, 4.7 sd) ended a finding after 6 h
+#: and opened it again 6 h later on synthetic histories.
+PARAMETER_RELEASE_S = 86400.0
 #: How often the detectors that need days of history run: (name, every [s]).
 _CADENCE = (("residual", RESIDUAL_EVERY_S), ("night", NIGHT_EVERY_S),
             ("parameter", PARAMETER_EVERY_S))
@@ -170,13 +182,14 @@ def _parameter_findings(conn: sqlite3.Connection, now_s: float) -> list[Finding]
         return None
     found = (parameter_change(t, v, sd, name=name, unit=parameter_unit(name))
              for name, (t, v, sd) in series.items())
-    return [_since_the_day(f) for f in found if f is not None]
+    return [_since_the_day(f, now_s) for f in found if f is not None]
 
 
-def _since_the_day(f: Finding) -> Finding:
+def _since_the_day(f: Finding, now_s: float) -> Finding:
     """The finding dated from the start of the first day that moved (a daily value's time is
-    the day's last estimate; the change began some time during that day)."""
-    day_s = math.floor(f.start_s / 86400.0) * 86400.0
+    the day's last estimate; the change began some time during that day of 24 h ending a
+    whole number of days before ``now_s``)."""
+    day_s = day_start_s(f.start_s, end_s=now_s)
     return replace(f, start_s=day_s, evidence=tuple(replace(e, since_s=day_s)
                                                     for e in f.evidence))
 
@@ -214,8 +227,8 @@ class FindingsStage:
         self.database = database
         self.run_id = run_id
         self.night = night
-        #: The panel, for the energy at stake of a parameter finding (None: not costed).
-        self.panel = panel
+        #: The energy at stake of parameter findings, with the panel (None: not costed).
+        self.stakes = None if panel is None else StakeCache(panel, database.parent)
         self.every_s = every_s
         self._last_s: float | None = None
         #: The last check that ran the residual CUSUM, the night check, the parameters.
@@ -223,8 +236,15 @@ class FindingsStage:
         self._thread: threading.Thread | None = None
         #: Cross-check findings seen but not yet confirmed: key → first seen [s].
         self._pending: dict[tuple[str, str], float] = {}
+        #: Open parameter findings the detector no longer sees: key → first missed [s].
+        self._absent: dict[tuple[str, str], float] = {}
         #: Checks that failed (logged); the next one is tried as usual.
         self.failures = 0
+
+    def reconfigure(self, panel: PanelConfig) -> None:
+        """Cost the stakes from now on with ``panel`` (a reload); those costed are redone."""
+        if self.stakes is not None:
+            self.stakes = StakeCache(panel, self.database.parent)
 
     def after_cycle(self, now_s: float) -> bool:
         """Start a check if one is due and none runs; whether one started."""
@@ -263,10 +283,8 @@ class FindingsStage:
         found, judged = detect(conn, now_s, residuals="residual" in due,
                                night=self.night if "night" in due else None,
                                parameters="parameter" in due)
-        if self.panel is not None and any(costed(f) for f in found):
-            week = stake_record(self.panel, self.database.parent, now_s)
-            found = [with_stake(conn, f, now_s, panel=self.panel, steps=week)
-                     if costed(f) else f for f in found]
+        if self.stakes is not None:
+            found = self.stakes.apply(conn, found, now_s)
         for name, kind in (("residual", "residual_shift"), ("night", "pane_offset_shift"),
                            ("parameter", "parameter_shift")):
             if kind in judged:
@@ -274,7 +292,9 @@ class FindingsStage:
         stored = table.load(conn)
         found, self._pending = confirmed(found, stored, self._pending, now_s=now_s,
                                          confirm_s=FLOW_CONFIRM_S, kinds=_FLOW_KINDS)
-        changes = reconcile(found, stored, judged=judged)
+        changes, self._absent = held_open(
+            reconcile(found, stored, judged=judged), stored, self._absent, now_s=now_s,
+            release_s=PARAMETER_RELEASE_S, kinds=("parameter_shift",), judged=judged)
         opened = table.apply(conn, changes, now_s=now_s, run_id=self.run_id())
         for fid, f in zip(opened, changes.opened, strict=True):
             log.warning("finding #%d %s: %s", fid, f.kind, f.action, finding_id=fid,

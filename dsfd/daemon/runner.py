@@ -278,7 +278,7 @@ class _Daemon:
         if new.daemon.metrics_file != self.cfg.daemon.metrics_file:
             self.metrics = _metrics_file(new)
         self.store.buffer.capacity = new.daemon.store_buffer_cycles
-        self.findings.panel = new  # the next stake is costed with the reloaded panel
+        self.findings.reconfigure(new)  # the next stakes are costed with the reloaded panel
         self.cfg = new
         log.info("configuration reloaded", file=str(path), calibration=note,
                  after_cycle=self.controller.cycles)

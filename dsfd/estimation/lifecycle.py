@@ -15,17 +15,20 @@ stored findings (docs/model.md#findings):
 * any other detection opens a new finding;
 * an open finding the detectors no longer report **ends**: its evidence went away (only
   when its detector ran: one that runs less often, or lacks the history, ends nothing).
+
+Two alarm delays go around it: :func:`confirmed` holds a new finding back until its evidence
+has lasted, :func:`held_open` an end until the evidence has stayed away.
 """
 
 from __future__ import annotations
 
 from collections.abc import Collection, Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from dsfd.estimation.diagnostics import Finding
 
 __all__ = ["ACKNOWLEDGED", "ENDED", "FINDING_KINDS", "OPEN", "Changes", "StoredFinding",
-           "confirmed", "key_of", "reconcile", "subject_of"]
+           "confirmed", "held_open", "key_of", "reconcile", "subject_of"]
 
 OPEN, ACKNOWLEDGED, ENDED = "open", "acknowledged", "ended"
 #: Every kind the detectors report (one Home Assistant problem sensor and one metric each).
@@ -153,3 +156,33 @@ def confirmed(detected: Iterable[Finding], stored: Sequence[StoredFinding],
         else:
             waiting[key] = first
     return out, waiting
+
+
+def held_open(changes: Changes, stored: Sequence[StoredFinding],
+              absent: Mapping[tuple[str, str], float], *, now_s: float, release_s: float,
+              kinds: Collection[str], judged: Collection[str]
+              ) -> tuple[Changes, dict[tuple[str, str], float]]:
+    """Hold back the end of open findings of ``kinds`` until their evidence has stayed away
+    ``release_s``.
+
+    The time delay of an alarm's return to normal (BACnet's ``Time_Delay_Normal`` of
+    intrinsic reporting, ASHRAE 135 clause 13.3: the condition must have been normal that long
+    before the object reports it): a detector whose statistic hovers at its threshold would
+    otherwise end a finding and open a new one for the same change. ``absent`` maps the key of
+    each open finding held so far to when its detector first missed it; the new map is
+    returned with ``changes`` whose ``ended`` keeps only the ends that are due. A key seen
+    again starts afresh; one whose detector did not run (not in ``judged``) keeps its time.
+    """
+    by_id = {s.finding_id: s for s in stored}
+    still_open = {s.key: s.kind for s in stored if s.state == OPEN}
+    waiting = {k: t for k, t in absent.items()
+               if k in still_open and still_open[k] not in judged}
+    ended: list[int] = []
+    for fid in changes.ended:
+        s = by_id[fid]
+        first = absent.get(s.key, now_s)
+        if s.kind not in kinds or now_s - first >= release_s:
+            ended.append(fid)
+        else:
+            waiting[s.key] = first
+    return replace(changes, ended=ended), waiting

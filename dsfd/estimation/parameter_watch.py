@@ -3,8 +3,9 @@
 
 Pure (no files, clocks or logging).
 
-* :func:`daily_estimates` — one value a day from a parameter's on-line estimates: the
-  precision-weighted mean of the day's estimates, with the sd of *one* estimate of the day's
+* :func:`daily_estimates` — one value a day from a parameter's on-line estimates (UTC days,
+  or the 24-h periods ending at a given time): the precision-weighted mean of the day's
+  estimates, with the sd of *one* estimate of the day's
   typical precision (consecutive on-line estimates share most of their window and each is
   the prior of the next, so the day holds about one estimate's worth of evidence, not n).
 * :func:`parameter_action` — what a person should check when a calibrated parameter has
@@ -20,7 +21,7 @@ import math
 import numpy as np
 
 __all__ = ["DAY_MIN_SPAN_S", "LOG_UNIT", "OFFSET_UNIT", "PARAMETER_MEANING", "daily_estimates",
-           "parameter_action"]
+           "day_start_s", "parameter_action"]
 
 SECONDS_PER_DAY = 86400.0
 #: A day's estimates must span this long (first to last) to make a daily value: a day the
@@ -35,10 +36,17 @@ LOG_UNIT = "log"
 OFFSET_UNIT = "W/m2"
 
 
+def day_start_s(time_s: float, *, end_s: float | None = None) -> float:
+    """Start [s] of the day of :func:`daily_estimates` that holds ``time_s``: its UTC day, or
+    with ``end_s`` its 24-h period of those ending at ``end_s``."""
+    origin = 0.0 if end_s is None else end_s
+    return origin + math.floor((time_s - origin) / SECONDS_PER_DAY) * SECONDS_PER_DAY
+
+
 def daily_estimates(times_s: np.ndarray, values: np.ndarray, sds: np.ndarray, *,
-                    min_span_s: float = DAY_MIN_SPAN_S
+                    end_s: float | None = None, min_span_s: float = DAY_MIN_SPAN_S
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """One estimate per UTC day of a parameter's on-line estimates.
+    """One estimate per day of a parameter's on-line estimates.
 
     Parameters
     ----------
@@ -47,6 +55,11 @@ def daily_estimates(times_s: np.ndarray, values: np.ndarray, sds: np.ndarray, *,
     values, sds : array (n,)
         The estimates and their posterior sd in the fitting coordinates (log θ for a
         positive parameter). Non-finite values or sds, and sds ≤ 0, are left out.
+    end_s : float, optional, [s]
+        The days are the 24-h periods ending at ``end_s`` (…, [end − 2 d, end − 1 d),
+        [end − 1 d, end)) instead of UTC days: the detector judges the last 24 h whole
+        whenever it runs, so how soon a change shows no longer depends on the hour at which
+        it began (with UTC days a change just after midnight waited a whole day more).
     min_span_s : float, [s]
         Days whose estimates span less (first to last) are left out.
 
@@ -72,7 +85,8 @@ def daily_estimates(times_s: np.ndarray, values: np.ndarray, sds: np.ndarray, *,
     t, v, w = t[ok], v[ok], 1.0 / sd[ok] ** 2
     if t.size == 0:
         return np.zeros(0), np.zeros(0), np.zeros(0)
-    days, inverse = np.unique(np.floor(t / SECONDS_PER_DAY), return_inverse=True)
+    origin = 0.0 if end_s is None else end_s
+    days, inverse = np.unique(np.floor((t - origin) / SECONDS_PER_DAY), return_inverse=True)
     first = np.full(days.size, np.inf)
     last = np.full(days.size, -np.inf)
     np.minimum.at(first, inverse, t)

@@ -2,10 +2,11 @@
 
 Read from the ``parameters`` table: the on-line estimates of each θ parameter with the
 posterior sd stored with them (schema 8), in the fitting coordinates (ln θ for the positive
-parameters, n as it is), over the last :data:`PARAMETER_WINDOW_S` of complete UTC days since
-the calibration last started from its priors (a ``prior`` row: what came before is another
-history), one value a day (:func:`dsfd.estimation.parameter_watch.daily_estimates`). Rows
-without an sd (written before schema 8) are left out.
+parameters, n as it is), over the last :data:`PARAMETER_WINDOW_S` since the calibration last
+started from its priors (a ``prior`` row: what came before is another history), one value a
+day, the days being the 24-h periods that end at the time of the check
+(:func:`dsfd.estimation.parameter_watch.daily_estimates`). Rows without an sd (written before
+schema 8) are left out.
 
 The heat-flux offsets q_x1 … q_x4 [W/m²] (the ``other`` column) are watched too: a sensor
 that reads off by a constant (a thermocouple offset) moves its node's offset, since the
@@ -56,10 +57,10 @@ def parameter_unit(name: str) -> str:
 
 def parameter_series(conn: sqlite3.Connection, now_s: float
                      ) -> dict[str, DailySeries] | None:
-    """Each θ parameter's and heat-flux offset's daily series up to the last complete UTC
-    day before ``now_s``; None while fewer than :data:`PARAMETER_MIN_DAYS` days make one
-    (the detector does not run)."""
-    until = math.floor(now_s / 86400.0) * 86400.0  # a day is judged once it ended
+    """Each θ parameter's and heat-flux offset's daily series over the 24-h days ending at
+    ``now_s``; None while fewer than :data:`PARAMETER_MIN_DAYS` days make one (the detector
+    does not run)."""
+    until = now_s  # the last day is the last 24 h, judged whole whenever the check runs
     restart = conn.execute("SELECT MAX(time_s) FROM parameters WHERE source = 'prior' AND "
                            "time_s < ?", (until,)).fetchone()[0]
     since = until - PARAMETER_WINDOW_S if restart is None else \
@@ -75,12 +76,12 @@ def parameter_series(conn: sqlite3.Connection, now_s: float
         value = rows[:, 1 + i]
         if name not in LINEAR_NAMES:  # the fitting coordinate, in which the sd is given
             value = np.log(np.where(value > 0, value, np.nan))
-        series[name] = daily_estimates(rows[:, 0], value, rows[:, 1 + n + i])
+        series[name] = daily_estimates(rows[:, 0], value, rows[:, 1 + n + i], end_s=until)
     others = [_offsets(r[-1]) for r in stored]
     floor = np.full(len(stored), OFFSET_SD_FLOOR_WM2)
     for name in OFFSET_NAMES:
         value = np.array([o.get(name, math.nan) for o in others], float)
-        series[name] = daily_estimates(rows[:, 0], value, floor)
+        series[name] = daily_estimates(rows[:, 0], value, floor, end_s=until)
     if max(t.size for t, _, _ in series.values()) < PARAMETER_MIN_DAYS:
         return None
     return series

@@ -15,7 +15,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dsfd.daemon.findings import PARAMETER_EVERY_S, PARAMETER_MIN_DAYS, FindingsStage, detect
+from dsfd.daemon.findings import (
+    PARAMETER_EVERY_S,
+    PARAMETER_MIN_DAYS,
+    PARAMETER_RELEASE_S,
+    FindingsStage,
+    detect,
+)
 from dsfd.estimation.diagnostics import Evidence, Finding
 from dsfd.estimation.lifecycle import Changes
 from dsfd.storage import findings as table
@@ -31,6 +37,9 @@ SIGMA = {"h_out": 0.08, "h_ca1": 0.06, "h_ca2": 0.1, "h_ca3": 0.06, "h_ca4": 0.0
 HISTORY_DAYS = 21
 OFFSETS = ("q_x1", "q_x2", "q_x3", "q_x4")
 SHIFT_AT = MIDNIGHT + 14 * DAY + 6 * 3600.0  # 06:00 on the 15th day
+#: The tests check every 6 h unless they say otherwise (every hour, the detector's own
+#: cadence, costs six times the checks).
+CHECK_GRID_S = 6 * 3600.0
 
 
 def _decision(cycle: int, t: float) -> dict[str, object]:
@@ -39,7 +48,8 @@ def _decision(cycle: int, t: float) -> dict[str, object]:
 
 
 def _parameter_history(tmp_path: Path, *, seed: int = 0, shift: dict[str, float] | None = None,
-                       sd_scale: float = 1.0, restart_at: float | None = None) -> Path:
+                       sd_scale: float = 1.0, restart_at: float | None = None,
+                       shift_at: float = SHIFT_AT) -> Path:
     """Three weeks of hourly on-line estimates written by the daemon's Store, from noon of
     the first day (a partial day): each parameter wanders from day to day uniformly within
     ± its posterior sd (a clean façade), has a daily cycle of one sd (what a lumped model's
@@ -59,7 +69,7 @@ def _parameter_history(tmp_path: Path, *, seed: int = 0, shift: dict[str, float]
             ar[i] = 0.8 * ar[i - 1] + rng.normal(0.0, 0.5 * sigma * np.sqrt(1 - 0.64))
         z[name] = (rng.uniform(-1.0, 1.0, HISTORY_DAYS)[day] * sigma + ar
                    + sigma * np.sin(2 * np.pi * t / DAY)
-                   + np.where(t >= SHIFT_AT, (shift or {}).get(name, 0.0), 0.0))
+                   + np.where(t >= shift_at, (shift or {}).get(name, 0.0), 0.0))
     prior_sd = {name: 0.15 if name == "n" else 0.7 for name in SIGMA}
     q_wander = {q: rng.uniform(-1.0, 1.0, HISTORY_DAYS)[day] + rng.normal(0.0, 0.5, t.size)
                 for q in OFFSETS}
@@ -71,7 +81,7 @@ def _parameter_history(tmp_path: Path, *, seed: int = 0, shift: dict[str, float]
                  for n, v in DEFAULTS.items()}
         # the heat-flux offsets [W/m2]: a wander of about 1 W/m2 (the clean bench days'
         # q_x3), no sd stored; ``shift`` adds to them as it is
-        theta.update({q: float(q_wander[q][i] + (shift or {}).get(q, 0.0) * (ti >= SHIFT_AT))
+        theta.update({q: float(q_wander[q][i] + (shift or {}).get(q, 0.0) * (ti >= shift_at))
                       for q in OFFSETS})
         sd = {n: s * sd_scale * rng.uniform(0.8, 1.25) for n, s in SIGMA.items()}
         rows.append((float(ti), "online", theta, sd))
@@ -84,13 +94,14 @@ def _parameter_history(tmp_path: Path, *, seed: int = 0, shift: dict[str, float]
     return tmp_path / "timeseries.sqlite"
 
 
-def _checks(db: Path) -> list[tuple[float, Changes]]:
-    """The stage's checks every 6 h (the parameter detector's cadence) from the 5th day on."""
+def _checks(db: Path, *, every_s: float = CHECK_GRID_S, start_s: float = MIDNIGHT + 4 * DAY,
+            stop_s: float = MIDNIGHT + (HISTORY_DAYS - 0.5) * DAY) -> list[tuple[float, Changes]]:
+    """The stage's checks every ``every_s`` from ``start_s`` (by default every 6 h from the
+    5th day on; the detector runs at each, being due hourly)."""
     stage = FindingsStage(db, run_id=lambda: 1)
     conn = sqlite3.connect(db)
     try:
-        return [(now, stage.check(conn, now)) for now in
-                MIDNIGHT + 4 * DAY + PARAMETER_EVERY_S * np.arange(HISTORY_DAYS * 4 - 15)]
+        return [(now, stage.check(conn, now)) for now in np.arange(start_s, stop_s, every_s)]
     finally:
         conn.close()
 
@@ -109,6 +120,27 @@ def test_an_inner_pane_thermocouple_reading_high_is_found_on_its_heat_flux_offse
     assert f.action.startswith("q_x3 has risen by 1") and "first check its sensor x3" in f.action
 
 
+@pytest.mark.parametrize("hour", [1, 12, 23])
+def test_how_soon_a_change_is_found_does_not_depend_on_the_hour_it_began(tmp_path, hour):
+    """The detector's days are the 24 h that end at each check, so a change is judged on a
+    whole day of it one day after it began, whatever the hour (with UTC days, one at 01:00
+    waited until the next midnight but one). q_x3 +15 W/m² (a thermocouple 1 K high, about
+    seven sd of its wander), checked hourly as the daemon does: found within a day and an
+    hour. h_in ×0.6 sits near the threshold (4.7 sd), checked every 6 h: found within two
+    days, once, and not ended and opened again as the days move from check to check (the
+    return delay)."""
+    shift_at = MIDNIGHT + 14 * DAY + hour * 3600.0
+    for name, shift, every_s, within in (
+            ("q_x3", 15.0, PARAMETER_EVERY_S, DAY + PARAMETER_EVERY_S),
+            ("h_in", float(np.log(0.6)), CHECK_GRID_S, 2 * DAY)):
+        db = _parameter_history(tmp_path / name, shift={name: shift}, shift_at=shift_at)
+        checks = _checks(db, every_s=every_s, start_s=shift_at - 2 * every_s,
+                         stop_s=shift_at + 3 * DAY)
+        opened = [now for now, c in checks for f in c.opened]
+        assert len(opened) == 1 and shift_at < opened[0] <= shift_at + within, name
+        assert not any(c.ended for _, c in checks), name
+
+
 @pytest.mark.parametrize(("name", "factor", "direction", "cause"), [
     ("f", 2.0, "risen", "clean the insect screens"),  # a clogging screen: path resistance x2
     ("h_in", 0.6, "fallen", "blind or curtain drawn"),
@@ -122,8 +154,10 @@ def test_a_parameter_shift_is_found_after_it_started_and_says_what_it_means(
     assert f.kind == "parameter_shift" and f.evidence[0].signal == f"parameter:{name}"
     # found after the change, within three days; never before it
     assert SHIFT_AT < found_at <= SHIFT_AT + 3 * DAY
-    # dated from the start of the day it began; detected when a day's evidence was complete
-    assert f.start_s == f.evidence[0].since_s == MIDNIGHT + 14 * DAY
+    # dated from the start of the day it began, a day being the 24 h that end a whole number
+    # of days before the check that found it; detected when that day's evidence was complete
+    assert f.start_s == f.evidence[0].since_s
+    assert f.start_s <= SHIFT_AT < f.start_s + DAY and (found_at - f.start_s) % DAY == 0.0
     assert SHIFT_AT < f.detected_s <= found_at
     assert f.evidence[0].unit == "log"
     assert np.exp(f.evidence[0].shift) == pytest.approx(factor, rel=0.25)
@@ -166,7 +200,8 @@ def test_a_calibration_restarted_from_its_priors_starts_a_new_history(tmp_path):
 
 def test_the_parameter_detector_not_run_ends_none_of_its_findings(tmp_path):
     """An open parameter finding stays open while the detector lacks its five days (a
-    restart from the priors) or is not due, and ends once it runs and no longer sees it."""
+    restart from the priors) or is not due, and ends once it has run for a day
+    (PARAMETER_RELEASE_S, the return delay) without seeing it."""
     restart = MIDNIGHT + 13 * DAY + 12 * 3600.0
     db = _parameter_history(tmp_path, restart_at=restart)
     ev = Evidence(signal="parameter:f", shift=0.7, shift_sd=4.6, unit="log",
@@ -181,13 +216,20 @@ def test_the_parameter_detector_not_run_ends_none_of_its_findings(tmp_path):
         early = restart + 4.6 * DAY
         assert "parameter_shift" not in detect(conn, early)[1]
         assert not stage.check(conn, early).ended
-        # five: the detector runs, and the evidence is not there
+        # five: the detector runs, and the evidence is not there; the finding ends once the
+        # checks of a whole day missed it (hourly, and checks between that do not run it)
         ready = restart + 5.6 * DAY
         assert PARAMETER_MIN_DAYS == 5 and "parameter_shift" in detect(conn, ready)[1]
-        assert stage.check(conn, ready).ended == [1]
-        # a finding opened now stays open while the detector is not due (6-hourly)
-        [again] = table.apply(conn, Changes(opened=[old]), now_s=ready, run_id=1)
-        assert not stage.check(conn, ready + 600.0).ended
-        assert stage.check(conn, ready + PARAMETER_EVERY_S).ended == [again]
+        assert PARAMETER_RELEASE_S == DAY
+        for k in range(4):
+            assert not stage.check(conn, ready + k * PARAMETER_EVERY_S).ended
+            assert not stage.check(conn, ready + k * PARAMETER_EVERY_S + 600.0).ended
+        assert stage.check(conn, ready + DAY).ended == [1]
+        # a finding opened now stays open while the detector is not due (hourly)
+        later = ready + DAY
+        [again] = table.apply(conn, Changes(opened=[old]), now_s=later, run_id=1)
+        assert not stage.check(conn, later + 600.0).ended
+        assert not stage.check(conn, later + PARAMETER_EVERY_S).ended
+        assert stage.check(conn, later + PARAMETER_EVERY_S + DAY).ended == [again]
     finally:
         conn.close()

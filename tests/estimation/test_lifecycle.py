@@ -119,3 +119,37 @@ def test_a_new_cross_check_finding_waits_for_its_time_delay_an_open_one_does_not
     r = _finding("residual_shift", subject="residual:x3_c")
     kept, pending = confirmed([r], [], {}, now_s=0.0, confirm_s=300.0, kinds=flow)
     assert kept == [r] and pending == {}
+
+
+def test_an_open_finding_of_a_held_kind_ends_only_after_its_evidence_stayed_away():
+    """held_open: the return delay of an alarm. A parameter finding the detector misses is
+    kept open until it has missed it for release_s; seen again, the delay starts afresh;
+    checks in which its detector did not run keep the time it was first missed. Other kinds
+    end at once."""
+    from dsfd.estimation.lifecycle import held_open
+
+    par = _stored(1, OPEN, kind="parameter_shift", subject="parameter:f")
+    flow = _stored(2, OPEN)
+    kw = {"release_s": 100.0, "kinds": ("parameter_shift",)}
+    judged_all = ("parameter_shift", "damper_no_flow")
+    ch, absent = held_open(reconcile([], [par, flow]), [par, flow], {}, now_s=0.0,
+                           judged=judged_all, **kw)
+    assert ch.ended == [2] and absent == {par.key: 0.0}
+    # a check in which the parameter detector did not run: nothing ends, the time is kept
+    ch, absent = held_open(reconcile([], [par], judged=()), [par], absent, now_s=50.0,
+                           judged=(), **kw)
+    assert not ch.ended and absent == {par.key: 0.0}
+    ch, absent = held_open(reconcile([], [par]), [par], absent, now_s=99.0,
+                           judged=judged_all, **kw)
+    assert not ch.ended and absent == {par.key: 0.0}
+    # seen again: refreshed, and the delay starts afresh when it is missed next
+    seen = _finding("parameter_shift", subject="", signal="parameter:f")
+    ch, absent = held_open(reconcile([seen], [par]), [par], absent, now_s=120.0,
+                           judged=judged_all, **kw)
+    assert [fid for fid, _ in ch.refreshed] == [1] and absent == {}
+    ch, absent = held_open(reconcile([], [par]), [par], absent, now_s=130.0,
+                           judged=judged_all, **kw)
+    assert not ch.ended and absent == {par.key: 130.0}
+    ch, absent = held_open(reconcile([], [par]), [par], absent, now_s=230.0,
+                           judged=judged_all, **kw)
+    assert ch.ended == [1] and absent == {}

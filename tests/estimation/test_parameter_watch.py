@@ -16,6 +16,7 @@ from dsfd.estimation.parameter_watch import (
     OFFSET_UNIT,
     PARAMETER_MEANING,
     daily_estimates,
+    day_start_s,
     parameter_action,
 )
 from dsfd.estimation.params import OFFSET_NAMES
@@ -97,3 +98,19 @@ def test_causes_the_evidence_cannot_separate_are_named_together():
     # an unknown parameter still gets an action, naming it
     assert parameter_action("h_x9", side=1, shift=5.0, shift_sd=3.0, unit="W/m2").startswith(
         "the calibrated h_x9 has risen by 5 W/m2")
+
+
+def test_days_can_be_the_24_h_that_end_at_a_given_time():
+    """end_s: the days are [end − k d, end − (k−1) d); a level that steps at 15:00 on the
+    second day is one whole day of each level in the days ending at 15:00 of the third,
+    where the UTC days mix them."""
+    t = MIDNIGHT + 3600.0 * np.arange(3 * 24)
+    step = MIDNIGHT + DAY + 15 * 3600.0
+    v = np.where(t >= step, 1.0, 0.0)
+    sd = np.full(t.size, 0.1)
+    days, mean, _ = daily_estimates(t, v, sd, end_s=step + DAY)
+    assert mean.tolist() == [0.0, 1.0] and days.tolist() == [step - 3600.0, step + DAY - 3600.0]
+    assert daily_estimates(t, v, sd)[1] == pytest.approx([0.0, 9 / 24, 1.0])
+    assert day_start_s(step + 10.0, end_s=step + DAY) == step
+    assert day_start_s(step - 10.0, end_s=step + DAY) == step - DAY
+    assert day_start_s(step - 10.0) == MIDNIGHT + DAY
