@@ -21,7 +21,6 @@ between.
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 import sqlite3
 from dataclasses import dataclass, field
@@ -38,6 +37,7 @@ from dsfd.estimation.stepdata import StepData, model_config, step_data
 from dsfd.measured import MeasuredDataError
 from dsfd.physics.model import LumpedModel
 from dsfd.storage.history import HistoryError, measured_from_history, read_history
+from dsfd.storage.parameter_series import offsets_of
 
 __all__ = ["STAKE_EVERY_S", "STAKE_SIGNAL", "STAKE_WINDOW_S", "StakeCache", "costed",
            "stake_record", "theta_at", "with_stake"]
@@ -61,7 +61,7 @@ def theta_at(conn: sqlite3.Connection, time_s: float, *, before: bool = False
                        (time_s,)).fetchone()
     if row is None or any(v is None for v in row[:-1]):
         return None
-    other = json.loads(row[-1] or "{}")
+    other = offsets_of(row[-1])
     values = dict(zip(names, row[:-1], strict=True))
     return np.array([float(values.get(n, other.get(n, 0.0))) for n in FIT_NAMES])
 

@@ -28,7 +28,7 @@ from dsfd.estimation.params import LINEAR_NAMES, OFFSET_NAMES
 from dsfd.storage.schema import PARAMETER_SD_COLUMNS
 
 __all__ = ["OFFSET_SD_FLOOR_WM2", "PARAMETER_MIN_DAYS", "PARAMETER_WINDOW_S", "DailySeries",
-           "parameter_series", "parameter_unit"]
+           "offsets_of", "parameter_series", "parameter_unit"]
 
 #: The parameter detector compares each day with the 7 days ending 2 days before it and
 #: needs 3 of them (ParameterSettings): it runs once 5 days make a series ...
@@ -77,7 +77,7 @@ def parameter_series(conn: sqlite3.Connection, now_s: float
         if name not in LINEAR_NAMES:  # the fitting coordinate, in which the sd is given
             value = np.log(np.where(value > 0, value, np.nan))
         series[name] = daily_estimates(rows[:, 0], value, rows[:, 1 + n + i], end_s=until)
-    others = [_offsets(r[-1]) for r in stored]
+    others = [offsets_of(r[-1]) for r in stored]
     floor = np.full(len(stored), OFFSET_SD_FLOOR_WM2)
     for name in OFFSET_NAMES:
         value = np.array([o.get(name, math.nan) for o in others], float)
@@ -87,8 +87,9 @@ def parameter_series(conn: sqlite3.Connection, now_s: float
     return series
 
 
-def _offsets(other: str | None) -> dict[str, float]:
-    """The heat-flux offsets of a row's ``other`` JSON (those that are numbers)."""
+def offsets_of(other: str | None) -> dict[str, float]:
+    """The heat-flux offsets of a ``parameters`` row's ``other`` JSON (those that are
+    numbers; none from text that is not a JSON object)."""
     try:
         values = json.loads(other or "{}")
     except ValueError:
