@@ -131,14 +131,37 @@ def cavity_flow_check(times_s: np.ndarray, v_cav_ms: np.ndarray,
     live: list[_Path] = []
     dead: list[_Path] = []
     for s in sorted({s for s in sets if s}, key=sorted):
-        sel = _latest(np.array([x == s for x in sets]) & np.isfinite(v) & should_move,
-                      st.min_samples)
+        judged = np.array([x == s for x in sets]) & np.isfinite(v) & should_move
+        sel = _latest(judged, st.min_samples)
         if np.count_nonzero(sel) >= st.min_samples:
-            (live if np.median(v[sel]) >= need else dead).append((s, sel))
+            if np.median(v[sel]) >= need:
+                live.append((s, sel))
+            else:
+                dead.append((s, sel | _dead_before(v, judged, need, st.min_samples)))
     if not dead:
         return None
     return _dead_paths(t, v, dead, live, base, need)
 
+
+def _dead_before(v: np.ndarray, judged: np.ndarray, need: float, n: int) -> np.ndarray:
+    """The judged readings of a dead path before its latest ``n`` that were dead too: blocks
+    of ``n`` going back from the latest while each block's median stays below ``need``, from
+    the first reading below ``need`` of the earliest.
+
+    They date the evidence from when the path stopped moving air, not from the first of the
+    latest readings: that moves on with every reading, and an acknowledged finding whose
+    evidence seemed to start after the acknowledgement came back although the same damper
+    had stayed stuck all along (docs/model.md#findings).
+    """
+    idx = np.flatnonzero(judged)
+    start = idx.size - n
+    while start - n >= 0 and np.median(v[idx[start - n:start]]) < need:
+        start -= n
+    while start < idx.size - n and v[idx[start]] >= need:  # the earliest block's live part
+        start += 1
+    out = np.zeros_like(judged, dtype=bool)
+    out[idx[start:]] = True
+    return out
 
 
 def _dead_paths(t: np.ndarray, v: np.ndarray, dead: list[_Path], live: list[_Path],

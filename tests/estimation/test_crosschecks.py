@@ -34,10 +34,31 @@ def test_a_damper_that_no_flowing_path_uses_is_named():
     ev, = f.evidence
     assert ev.signal == "crosscheck:v_cav_ms[EB+ET]" and ev.unit == "m/s"
     assert ev.statistic < ev.threshold
-    # judged on the path's latest 15 readings: the evidence starts at the first of them
-    last_ext = max(i for i, x in enumerate(sets) if x == EXT)
-    assert ev.since_s == t[last_ext - 14]
+    # judged on the path's latest 15 readings, dated from when the path stopped moving air:
+    # every one of its two hours here
+    first_ext = min(i for i, x in enumerate(sets) if x == EXT)
+    assert ev.since_s == t[first_ext]
     assert f.confidence > 0.9
+
+
+def test_the_evidence_of_a_damper_that_stays_stuck_keeps_its_start():
+    """EB sticks shut after the exterior path flowed for two hours. As the stuck readings go
+    on, the finding keeps dating from the sticking (within 15 readings of it), not
+    from the first of the latest 15, which moved on with every reading: an acknowledged
+    finding's evidence then seemed to start after the acknowledgement, and the same stuck
+    damper was filed again (the MQTT findings test on a loaded machine)."""
+    t, v, sets, drive = _flow_day({CLOSED: 0.02, EXT: 0.25, INT: 0.20})
+    stuck_t, stuck_v, stuck_sets, stuck_drive = _flow_day({EXT: 0.0}, seed=3, n=120)
+    stuck_at = t[-1] + 60.0
+    t = np.concatenate([t, stuck_t + (stuck_at - T0)])
+    v, sets = np.concatenate([v, stuck_v]), sets + stuck_sets
+    drive = np.concatenate([drive, stuck_drive])
+    starts = []
+    for end in range(len(sets) - 100, len(sets) + 1, 7):
+        f = cavity_flow_check(t[:end], v[:end], sets[:end], drive[:end])
+        assert f is not None and f.kind == "damper_no_flow"
+        starts.append(f.start_s)
+    assert all(stuck_at <= s < stuck_at + 15 * 60.0 for s in starts), starts
 
 
 def test_a_damper_that_sticks_after_its_path_flowed_is_found_on_the_recent_readings():
