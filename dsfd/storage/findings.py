@@ -73,9 +73,12 @@ def apply(conn: sqlite3.Connection, changes: Changes, *, now_s: float,
                 (run_id, f.kind, subject_of(f), f.confidence, f.start_s, f.detected_s, now_s,
                  now_s, evidence_json(f.evidence), f.action, OPEN))
             opened.append(int(cur.lastrowid or 0))
+        # A parameter finding keeps the time it was first detected: the detector's days end
+        # at each hourly check, so a refresh's alarm day is a later day each time.
         conn.executemany(
-            "UPDATE findings SET subject = ?, confidence = ?, detected_s = ?, last_seen_s = ?, "
-            "evidence = ?, action = ? WHERE finding_id = ? AND state = ?",
+            "UPDATE findings SET subject = ?, confidence = ?, detected_s = CASE kind WHEN "
+            "'parameter_shift' THEN detected_s ELSE ? END, last_seen_s = ?, evidence = ?, "
+            "action = ? WHERE finding_id = ? AND state = ?",
             [(subject_of(f), f.confidence, f.detected_s, now_s, evidence_json(f.evidence),
               f.action, fid, OPEN) for fid, f in changes.refreshed])
         conn.executemany(

@@ -167,6 +167,9 @@ def test_a_parameter_shift_is_found_after_it_started_and_says_what_it_means(
     try:
         assert conn.execute("SELECT kind, subject, state FROM findings").fetchall() == [
             ("parameter_shift", f"parameter:{name}", "open")]
+        # refreshed hourly for days, it keeps the time it was first detected (each refresh's
+        # alarm day ends at its own check)
+        assert conn.execute("SELECT detected_s FROM findings").fetchall() == [(f.detected_s,)]
     finally:
         conn.close()
 
