@@ -80,9 +80,8 @@ from dsfd.storage.schema import BUSY_TIMEOUT_MS
 
 __all__ = ["CHECK_EVERY_S", "CROSSCHECK_WINDOW_S", "DAMPER_SHORT", "FLOW_CONFIRM_S",
            "NIGHT_EVERY_S", "NIGHT_MIN_S", "PARAMETER_EVERY_S", "PARAMETER_MIN_DAYS",
-           "PARAMETER_RELEASE_S",
-           "PARAMETER_WINDOW_S", "RESIDUAL_EVERY_S", "RESIDUAL_MIN_S", "FindingsStage",
-           "NightSite", "detect"]
+           "PARAMETER_RELEASE_S", "PARAMETER_WINDOW_S", "RESIDUAL_EVERY_S", "RESIDUAL_MIN_S",
+           "FindingsStage", "NightSite", "detect"]
 
 log = get_logger("dsfd.findings")
 
