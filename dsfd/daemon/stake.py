@@ -127,29 +127,29 @@ class StakeCache:
     state_dir: Path
     every_s: float = STAKE_EVERY_S
     costings: int = 0
-    _last: dict[tuple[str, str], tuple[float, Finding, Finding]] = field(default_factory=dict)
+    #: Per finding key: when it was costed, and the evidence and sentence the costing added.
+    _last: dict[tuple[str, str], tuple[float, tuple[Evidence, ...], str]] = field(
+        default_factory=dict)
 
     def apply(self, conn: sqlite3.Connection, found: list[Finding], now_s: float
               ) -> list[Finding]:
         """``found`` with the stake of each costed finding: costed now if due (new, or
         costed ``every_s`` ago), else the last costing's evidence and sentence."""
-        due = [f for f in found if costed(f) and not self._fresh(f, now_s)]
+        due = {id(f) for f in found if costed(f) and not self._fresh(f, now_s)}
         week = stake_record(self.panel, self.state_dir, now_s) if due else None
         out = []
         for f in found:
-            if not costed(f):
-                out.append(f)
-            elif any(f is d for d in due):
+            if id(f) in due:
                 g = with_stake(conn, f, now_s, panel=self.panel, steps=week)
-                self._last[key_of(f)] = (now_s, f, g)
+                self._last[key_of(f)] = (now_s, g.evidence[len(f.evidence):],
+                                         g.action[len(f.action):])
                 self.costings += 1
-                out.append(g)
-            else:
-                _, bare, costed_f = self._last[key_of(f)]
-                extra = costed_f.evidence[len(bare.evidence):]
-                note = costed_f.action[len(bare.action):]
-                out.append(dataclasses.replace(f, evidence=(*f.evidence, *extra),
-                                               action=f.action + note))
+                f = g
+            elif costed(f):
+                _, extra, note = self._last[key_of(f)]
+                f = dataclasses.replace(f, evidence=(*f.evidence, *extra),
+                                        action=f.action + note)
+            out.append(f)
         return out
 
     def _fresh(self, f: Finding, now_s: float) -> bool:

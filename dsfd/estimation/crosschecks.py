@@ -137,16 +137,16 @@ def cavity_flow_check(times_s: np.ndarray, v_cav_ms: np.ndarray,
             if np.median(v[sel]) >= need:
                 live.append((s, sel))
             else:
-                dead.append((s, sel | _dead_before(v, judged, need, st.min_samples)))
+                dead.append((s, _dead_run(v, judged, need, st.min_samples)))
     if not dead:
         return None
     return _dead_paths(t, v, dead, live, base, need)
 
 
-def _dead_before(v: np.ndarray, judged: np.ndarray, need: float, n: int) -> np.ndarray:
-    """The judged readings of a dead path before its latest ``n`` that were dead too: blocks
-    of ``n`` going back from the latest while each block's median stays below ``need``, from
-    the first reading below ``need`` of the earliest.
+def _dead_run(v: np.ndarray, judged: np.ndarray, need: float, n: int) -> np.ndarray:
+    """The judged readings of a dead path since it stopped moving air: its latest ``n`` and,
+    going back, each earlier block of ``n`` whose median stays below ``need``, from the first
+    reading below ``need`` of the earliest.
 
     They date the evidence from when the path stopped moving air, not from the first of the
     latest readings: that moves on with every reading, and an acknowledged finding whose
