@@ -74,9 +74,12 @@ NAMES: dict[str, tuple[tuple[str, str | None], ...]] = {
     "stuck-damper": (("damper_no_flow", None),),
     # the louver's heat-flux offset and the slats' convection: both actions name a slip
     "louver-slip": (("parameter_shift", "parameter:q_x4"), ("parameter_shift", "parameter:h_ca2")),
-    # the inner pane's heat-flux offset: its action names the sensor x3 first
-    "tc-offset": (("residual_shift", "residual:x3_c"), ("parameter_shift", "parameter:q_x3")),
-    "tc-drift": (("residual_shift", "residual:x3_c"), ("parameter_shift", "parameter:q_x3")),
+    # the inner pane's heat-flux offset, at night or as daily means: its action names the
+    # sensor x3 first
+    "tc-offset": (("night_offset_shift", "night:q_x3"), ("residual_shift", "residual:x3_c"),
+                  ("parameter_shift", "parameter:q_x3")),
+    "tc-drift": (("night_offset_shift", "night:q_x3"), ("residual_shift", "residual:x3_c"),
+                 ("parameter_shift", "parameter:q_x3")),
     "soiling": (),
     "screen": (("parameter_shift", "parameter:f"),),
 }

@@ -23,6 +23,11 @@ Every :data:`NIGHT_EVERY_S`, once :data:`NIGHT_MIN_S` of history is stored, it a
 :data:`NIGHT_WINDOW_S` (readings with the sun 6° below the horizon that had it below the
 horizon two hours before).
 
+Every :data:`NIGHT_OFFSET_EVERY_S`, once :data:`NIGHT_OFFSET_MIN_S` of history is stored, it
+runs :func:`~dsfd.estimation.night_offsets.night_offset_change` on the heat-flux offsets of the
+inner panes and the louver at night over the last :data:`NIGHT_OFFSET_WINDOW_S` (the nights
+of the night check).
+
 Every :data:`PARAMETER_EVERY_S` it runs :func:`~dsfd.estimation.parameter_shift.parameter_change`
 per θ parameter and heat-flux offset on its on-line estimates of the last
 :data:`PARAMETER_WINDOW_S` since the calibration last started from its priors, each with the
@@ -55,6 +60,7 @@ from dsfd.daemon.stake import StakeCache
 from dsfd.estimation.crosschecks import cavity_flow_check, night_pane_check
 from dsfd.estimation.diagnostics import Finding, residual_change, residual_settings
 from dsfd.estimation.lifecycle import Changes, confirmed, held_open, reconcile
+from dsfd.estimation.night_offsets import NIGHT_OFFSET_NAMES, night_offset_change
 from dsfd.estimation.parameter_shift import parameter_change
 from dsfd.estimation.parameter_watch import day_start_s
 from dsfd.storage import findings as table
@@ -62,24 +68,30 @@ from dsfd.storage.evidence import (
     CROSSCHECK_WINDOW_S,
     DAMPER_SHORT,
     NIGHT_MIN_S,
+    NIGHT_OFFSET_MIN_S,
+    NIGHT_OFFSET_REFERENCE_S,
+    NIGHT_OFFSET_WINDOW_S,
     NIGHT_WINDOW_S,
     RESIDUAL_MIN_S,
     RESIDUAL_WINDOW_S,
     RESIDUALS,
     flow_series,
+    night_mask,
     night_series,
     residual_series,
 )
 from dsfd.storage.parameter_series import (
     PARAMETER_MIN_DAYS,
     PARAMETER_WINDOW_S,
+    offset_series,
     parameter_series,
     parameter_unit,
 )
 from dsfd.storage.schema import BUSY_TIMEOUT_MS
 
 __all__ = ["CHECK_EVERY_S", "CROSSCHECK_WINDOW_S", "DAMPER_SHORT", "FLOW_CONFIRM_S",
-           "NIGHT_EVERY_S", "NIGHT_MIN_S", "PARAMETER_EVERY_S", "PARAMETER_MIN_DAYS",
+           "NIGHT_EVERY_S", "NIGHT_MIN_S", "NIGHT_OFFSET_EVERY_S", "NIGHT_OFFSET_MIN_S",
+           "NIGHT_OFFSET_WINDOW_S", "PARAMETER_EVERY_S", "PARAMETER_MIN_DAYS",
            "PARAMETER_RELEASE_S", "PARAMETER_WINDOW_S", "RESIDUAL_EVERY_S", "RESIDUAL_MIN_S",
            "FindingsStage", "NightSite", "detect"]
 
@@ -106,9 +118,13 @@ PARAMETER_EVERY_S = 3600.0
 #: near its threshold (a room-side convection fallen ×0.6, 4.7 sd) ended a finding after 6 h
 #: and opened it again 6 h later on synthetic histories.
 PARAMETER_RELEASE_S = 86400.0
+#: The night offsets (docs/model.md#diagnostics-night-offsets) are judged every hour (a run
+#: reads a week of 10-min parameter rows, about 0.05 s of CPU), on the last
+#: NIGHT_OFFSET_WINDOW_S once NIGHT_OFFSET_MIN_S of history is stored.
+NIGHT_OFFSET_EVERY_S = 3600.0
 #: How often the detectors that need days of history run: (name, every [s]).
 _CADENCE = (("residual", RESIDUAL_EVERY_S), ("night", NIGHT_EVERY_S),
-            ("parameter", PARAMETER_EVERY_S))
+            ("parameter", PARAMETER_EVERY_S), ("night_offset", NIGHT_OFFSET_EVERY_S))
 _FLOW_KINDS = ("damper_no_flow", "cavity_no_flow", "cavity_flow_when_closed")
 #: A cross-check finding opens once three checks over 10 min report it (the alarm time
 #: delay of estimation.lifecycle.confirmed): on the bench's clean winter days a weak healthy
@@ -173,6 +189,18 @@ def _night_finding(conn: sqlite3.Connection, now_s: float, site: NightSite) -> F
     return night_pane_check(s.time_s, s.pane_c, s.t_out_c, s.t_room_c, s.night, pane="x1_c")
 
 
+def _night_offset_findings(conn: sqlite3.Connection, now_s: float, site: NightSite
+                           ) -> list[Finding]:
+    """The night-offset CUSUM (:func:`~dsfd.estimation.night_offsets.night_offset_change`) on
+    each offset of :data:`~dsfd.estimation.night_offsets.NIGHT_OFFSET_NAMES`."""
+    judge_from = now_s - NIGHT_OFFSET_WINDOW_S
+    times, values = offset_series(conn, judge_from - NIGHT_OFFSET_REFERENCE_S, now_s)
+    night = night_mask(times, latitude_deg=site.latitude_deg, longitude_deg=site.longitude_deg)
+    found = (night_offset_change(times, values[name], night, name=name, judge_from_s=judge_from)
+             for name in NIGHT_OFFSET_NAMES)
+    return [f for f in found if f is not None]
+
+
 def _parameter_findings(conn: sqlite3.Connection, now_s: float) -> list[Finding] | None:
     """The parameter detector on each θ parameter's daily series; None (not run) while the
     series are too short."""
@@ -194,12 +222,13 @@ def _since_the_day(f: Finding, now_s: float) -> Finding:
 
 
 def detect(conn: sqlite3.Connection, now_s: float, *, residuals: bool = True,
-           night: NightSite | None = None, parameters: bool = True
-           ) -> tuple[list[Finding], set[str]]:
+           night: NightSite | None = None, parameters: bool = True,
+           night_offsets: NightSite | None = None) -> tuple[list[Finding], set[str]]:
     """What the detectors report on the rows stored up to ``now_s``, and the kinds judged
     (those of the detectors that ran): the cavity cross-check always, the residual CUSUM if
-    ``residuals``, the night check if ``night``, the parameter detector if ``parameters``;
-    each of the last three once its history is stored."""
+    ``residuals``, the night check if ``night``, the parameter detector if ``parameters``,
+    the night offsets if ``night_offsets`` (the site, for the nights); each of the last four
+    once its history is stored."""
     found = [f for f in (_flow_finding(conn, now_s),) if f is not None]
     judged = set(_FLOW_KINDS)
     oldest = conn.execute("SELECT MIN(time_s) FROM decisions").fetchone()[0]
@@ -210,6 +239,9 @@ def detect(conn: sqlite3.Connection, now_s: float, *, residuals: bool = True,
     if night is not None and history_s >= NIGHT_MIN_S:
         found += [f for f in (_night_finding(conn, now_s, night),) if f is not None]
         judged |= {"pane_out_of_bounds", "pane_offset_shift"}
+    if night_offsets is not None and history_s >= NIGHT_OFFSET_MIN_S:
+        found += _night_offset_findings(conn, now_s, night_offsets)
+        judged.add("night_offset_shift")
     shifts = _parameter_findings(conn, now_s) if parameters else None
     if shifts is not None:
         found += shifts
@@ -281,11 +313,13 @@ class FindingsStage:
                if abs(now_s - self._ran_s.get(name, -math.inf)) >= every}
         found, judged = detect(conn, now_s, residuals="residual" in due,
                                night=self.night if "night" in due else None,
-                               parameters="parameter" in due)
+                               parameters="parameter" in due,
+                               night_offsets=self.night if "night_offset" in due else None)
         if self.stakes is not None:
             found = self.stakes.apply(conn, found, now_s)
         for name, kind in (("residual", "residual_shift"), ("night", "pane_offset_shift"),
-                           ("parameter", "parameter_shift")):
+                           ("parameter", "parameter_shift"),
+                           ("night_offset", "night_offset_shift")):
             if kind in judged:
                 self._ran_s[name] = now_s
         stored = table.load(conn)

@@ -19,9 +19,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["TEMPERATURE_MIN_SHIFT_K", "Cusum", "Evidence", "Finding", "ResidualBlocks",
-           "ResidualSettings", "block_labels", "block_means", "cusum_confidence", "page_cusum",
-           "residual_blocks", "residual_change", "residual_settings"]
+__all__ = ["TEMPERATURE_MIN_SHIFT_K", "BlockChange", "Cusum", "Evidence", "Finding",
+           "ResidualBlocks", "ResidualSettings", "block_change", "block_labels", "block_means",
+           "cusum_confidence", "page_cusum", "residual_blocks", "residual_change",
+           "residual_settings"]
 
 #: MAD → σ for normal data (Rousseeuw & Croux 1993).
 MAD_TO_SD = 1.4826
@@ -305,27 +306,79 @@ def residual_change(times_s: np.ndarray, residuals: np.ndarray, *, signal: str, 
     -------
     Finding or None
         ``residual_shift`` with the block where the CUSUM crossed ``h_sd`` (``detected_s``:
-        that block's end) and the block after its last zero (``start_s``: that block's start).
+        that block's end, or its last residual) and the block after its last zero
+        (``start_s``: that block's start).
     """
     st = settings or ResidualSettings()
-    b = residual_blocks(times_s, residuals, settings=st, control=control)
-    blocks, means, centre, z = b.blocks, b.means, b.centre, b.z
+    change = block_change(times_s, residuals, settings=st, control=control)
+    if change is None:
+        return None
+    ev = change.evidence(f"residual:{signal}", unit)
+    direction = "above" if change.side > 0 else "below"
+    return Finding(kind="residual_shift", confidence=cusum_confidence(ev.statistic, st.h_sd),
+                   start_s=change.start_s, detected_s=change.detected_s, evidence=(ev,),
+                   action=(f"{signal} reads {abs(ev.shift):.3g} {unit} {direction} what the "
+                           f"calibrated model predicts: check the {signal} sensor, or what "
+                           "changed on the façade (the residual alone cannot tell which)"))
+
+
+@dataclass(frozen=True)
+class BlockChange:
+    """The first alarm of the CUSUM of :func:`residual_blocks` (:func:`block_change`).
+
+    ``shift`` and ``shift_sd`` are the mean departure of the blocks from the alarm's start to
+    the alarm from their references (in the signal's unit and in spreads), ``side`` +1 for
+    an upward shift, ``start_s`` the start of the block after the last zero and
+    ``detected_s`` the end of the block where the statistic crossed the threshold (its last
+    value, if that block is the latest and not yet over).
+    """
+
+    side: int
+    shift: float
+    shift_sd: float
+    start_s: float
+    detected_s: float
+    statistic: float
+    threshold: float
+
+    def evidence(self, signal: str, unit: str) -> Evidence:
+        """The change as the evidence of a finding about ``signal``."""
+        return Evidence(signal=signal, shift=self.shift, shift_sd=self.shift_sd, unit=unit,
+                        since_s=self.start_s, statistic=self.statistic,
+                        threshold=self.threshold)
+
+
+def block_change(times_s: np.ndarray, values: np.ndarray, *, settings: ResidualSettings,
+                 control: np.ndarray | None = None, judge_from_s: float = -math.inf
+                 ) -> BlockChange | None:
+    """The two-sided CUSUM (:func:`page_cusum`) of the standardised blocks of
+    :func:`residual_blocks` that start at or after ``judge_from_s``: its first alarm, or None.
+
+    The blocks before ``judge_from_s`` only serve as references. A caller that checks again
+    and again on a moving window should pass values from a reference span (``reference_days``
+    and the spread's guard) before it: then every judged block keeps the same reference from
+    one check to the next, and as the CUSUM's origin moves later it can only lose alarms
+    (the recursion is monotone in its start value), so a later check never finds a change
+    in old blocks that the earlier checks judged without one."""
+    st = settings
+    b = residual_blocks(times_s, values, settings=st, control=control)
+    z = np.where(b.blocks * st.block_s >= judge_from_s, b.z, np.nan)
     cs = page_cusum(z, k=b.k, h=st.h_sd)
     if cs.alarm is None:
         return None
     after = slice(cs.start, cs.alarm + 1)
-    shift = float(np.nanmean(means[after] - centre[after]))
-    shift_sd = float(np.nanmean(z[after]))
-    start_s = float(blocks[cs.start] * st.block_s)
-    ev = Evidence(signal=f"residual:{signal}", shift=shift, shift_sd=shift_sd, unit=unit,
-                  since_s=start_s, statistic=float(cs.statistic[-1]), threshold=st.h_sd)
-    direction = "above" if cs.side > 0 else "below"
-    return Finding(kind="residual_shift", confidence=cusum_confidence(ev.statistic, st.h_sd),
-                   start_s=start_s, detected_s=float((blocks[cs.alarm] + 1) * st.block_s),
-                   evidence=(ev,), action=(
-                       f"{signal} reads {abs(shift):.3g} {unit} {direction} what the "
-                       f"calibrated model predicts: check the {signal} sensor, or what changed "
-                       "on the façade (the residual alone cannot tell which)"))
+    return BlockChange(side=cs.side, shift=float(np.nanmean(b.means[after] - b.centre[after])),
+                       shift_sd=float(np.nanmean(b.z[after])),
+                       start_s=float(b.blocks[cs.start] * st.block_s),
+                       detected_s=min(float((b.blocks[cs.alarm] + 1) * st.block_s),
+                                      _last_time(times_s, values)),
+                       statistic=float(cs.statistic[-1]), threshold=st.h_sd)
+
+
+def _last_time(times_s: np.ndarray, values: np.ndarray) -> float:
+    """Time of the last finite value (a block's end can lie beyond it, after the check)."""
+    t = np.asarray(times_s, float)[np.isfinite(np.asarray(values, float))]
+    return float(t[-1]) if t.size else math.inf
 
 
 def _same_time_reference(blocks: np.ndarray, means: np.ndarray, st: ResidualSettings,

@@ -33,10 +33,11 @@ __all__ = ["ACKNOWLEDGED", "ENDED", "FINDING_KINDS", "OPEN", "Changes", "StoredF
 OPEN, ACKNOWLEDGED, ENDED = "open", "acknowledged", "ended"
 #: Every kind the detectors report (one Home Assistant problem sensor and one metric each).
 FINDING_KINDS = ("damper_no_flow", "cavity_no_flow", "cavity_flow_when_closed",
-                 "pane_out_of_bounds", "pane_offset_shift", "residual_shift", "parameter_shift")
+                 "pane_out_of_bounds", "pane_offset_shift", "residual_shift", "parameter_shift",
+                 "night_offset_shift")
 #: Kinds about one signal: the subject is the evidence's signal.
 _SIGNAL_KINDS = frozenset({"residual_shift", "parameter_shift", "pane_out_of_bounds",
-                           "pane_offset_shift"})
+                           "pane_offset_shift", "night_offset_shift"})
 
 
 def subject_of(f: Finding) -> str:

@@ -19,7 +19,7 @@ from typing import Any
 from dsfd.estimation.crosschecks import FlowCheckSettings
 from dsfd.measured import iso_utc
 from dsfd.report.plotting import ReportFigure, figure_html, png
-from dsfd.storage.evidence import NIGHT_MIN_S, RESIDUAL_MIN_S
+from dsfd.storage.evidence import NIGHT_MIN_S, NIGHT_OFFSET_MIN_S, RESIDUAL_MIN_S
 from dsfd.storage.findings import findings_between
 from dsfd.storage.history import History
 from dsfd.storage.parameter_series import PARAMETER_MIN_DAYS
@@ -31,7 +31,8 @@ __all__ = ["MAX_FIGURES", "Diagnostics", "build_diagnostics", "render_section"]
 MAX_FIGURES = 6
 _STATE_ORDER = {"open": 0, "acknowledged": 1, "ended": 2}
 #: Kinds whose statistic is a CUSUM in standardised units (the others: the signal's unit).
-_CUSUM_KINDS = frozenset({"residual_shift", "parameter_shift", "pane_offset_shift"})
+_CUSUM_KINDS = frozenset({"residual_shift", "parameter_shift", "pane_offset_shift",
+                          "night_offset_shift"})
 
 
 @dataclass(frozen=True)
@@ -61,7 +62,8 @@ def _none_line(history: History) -> str:
     return (f"No findings in this period. The cavity cross-check judges a damper set once it "
             f"has {FlowCheckSettings().min_samples} readings in the last day; the prediction-"
             f"error CUSUM needs {RESIDUAL_MIN_S / 86400:g} days of stored history, the night "
-            f"pane check {NIGHT_MIN_S / 86400:g} days, the parameter detector "
+            f"pane check {NIGHT_MIN_S / 86400:g} days, the night offsets "
+            f"{NIGHT_OFFSET_MIN_S / 86400:g} days, the parameter detector "
             f"{PARAMETER_MIN_DAYS} days of on-line estimates (this log spans {_span(span)}).")
 
 
@@ -117,6 +119,13 @@ def _caption(row: Mapping[str, Any]) -> str:
                 + ("with the bounds a pane between the sky and the room keeps to."
                    if kind == "pane_out_of_bounds" else
                    "with the median of the nights before the start it is judged against."))
+    elif kind == "night_offset_shift":
+        what = ("The node's heat-flux offset as the calibration estimated it at night (the "
+                "sun 6° below the horizon and below it 2 h before), in hourly block means "
+                "against the detector's reference (the median at the same time of night on the "
+                "5 previous days); below, Page's CUSUM of the standardised blocks, recomputed "
+                "from the stored rows, against its threshold. At night no sun moves the "
+                "offset: a sensor that reads off does.")
     elif kind == "parameter_shift":
         what = ("Each on-line estimate of the parameter and the daily values the detector "
                 "judges (the precision-weighted mean of the day's estimates) ± the posterior "

@@ -23,24 +23,38 @@ from matplotlib.figure import Figure
 
 from dsfd.config.panel import Parameters
 from dsfd.estimation.crosschecks import FlowCheckSettings, NightCheckSettings, nightly_offsets
-from dsfd.estimation.diagnostics import page_cusum, residual_blocks, residual_settings
+from dsfd.estimation.diagnostics import (
+    ResidualSettings,
+    page_cusum,
+    residual_blocks,
+    residual_settings,
+)
+from dsfd.estimation.night_offsets import NIGHT_OFFSET_SETTINGS
 from dsfd.estimation.parameter_watch import LOG_UNIT
 from dsfd.estimation.params import OFFSET_NAMES
 from dsfd.report.kpis import zone_name
 from dsfd.report.plotting import OUTSIDE, STATE_COLOURS, STATE_LABELS, WIDTH_IN
 from dsfd.storage.evidence import (
     CROSSCHECK_WINDOW_S,
+    NIGHT_OFFSET_REFERENCE_S,
+    NIGHT_OFFSET_WINDOW_S,
     NIGHT_WINDOW_S,
     RESIDUAL_WINDOW_S,
     RESIDUALS,
     flow_series,
+    night_mask,
     night_series,
     residual_series,
 )
-from dsfd.storage.parameter_series import PARAMETER_MIN_DAYS, parameter_series, parameter_unit
+from dsfd.storage.parameter_series import (
+    PARAMETER_MIN_DAYS,
+    offset_series,
+    parameter_series,
+    parameter_unit,
+)
 
 __all__ = ["FLOW_KINDS", "NIGHT_KINDS", "NoEvidence", "evidence_figure", "flow_figure",
-           "night_figure", "parameter_figure", "residual_figure"]
+           "night_figure", "night_offset_figure", "parameter_figure", "residual_figure"]
 
 FLOW_KINDS = ("damper_no_flow", "cavity_no_flow", "cavity_flow_when_closed")
 NIGHT_KINDS = ("pane_out_of_bounds", "pane_offset_shift")
@@ -106,42 +120,86 @@ def residual_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h: 
     and the CUSUM statistic against its threshold."""
     reading = _signal(row)
     unit = next((u for r, _, u in RESIDUALS if r == reading), "")
-    st = residual_settings(unit)
     end = _end_s(row)
-    ax_t = _Axes(offset_h, float(row["start_s"]) - 86400.0, end + _HOUR)
-    fig = Figure(figsize=(WIDTH_IN, 5.0), layout="constrained")
-    top, bottom = fig.subplots(2, 1, sharex=True, height_ratios=[1.6, 1.0])
-    label = STATE_LABELS.get(reading[:2], "cavity air speed" if reading == "v_cav_ms"
-                             else reading)
-    fig.suptitle(f"#{row['finding_id']} residual_shift: one-step prediction error of "
-                 f"{label}", fontsize=12, x=0.01, ha="left")
+    lo_s = float(row["start_s"]) - 86400.0
     output = [o for o in RESIDUALS if o[0] == reading]
     times, errors, regime = (residual_series(conn, float(row["detected_s"]) - RESIDUAL_WINDOW_S,
-                                             ax_t.hi_s, output) if output
+                                             end + _HOUR, output) if output
                              else (np.zeros(0), {}, np.zeros(0)))
     err = errors.get(reading, np.zeros(0))
     if not np.isfinite(err).any():
         raise NoEvidence(f"no stored readings and predictions of {reading or '?'} in the "
                          "finding's window")
-    b = residual_blocks(times, err, settings=st, control=regime)
+    label = STATE_LABELS.get(reading[:2], "cavity air speed" if reading == "v_cav_ms"
+                             else reading)
+    return _block_figure(
+        row, offset_h, lo_s, times, err, settings=residual_settings(unit), control=regime,
+        title=f"one-step prediction error of {label}", unit=unit,
+        colour=STATE_COLOURS.get(reading[:2], "#8c564b"),
+        each="each cycle: reading − prediction", ylabel="measured − predicted",
+        centre="reference: median at this time of day, 5 previous days")
+
+
+def night_offset_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h: float,
+                        config: Mapping[str, Any] | None) -> Figure:
+    """A node's heat-flux offset at night: each stored estimate, the 30-min block means the
+    detector judges with their reference, and the CUSUM statistic against its threshold."""
+    name = _signal(row)
+    end = _end_s(row)
+    lo_s = float(row["start_s"]) - 2 * 86400.0
+    site = (config or {}).get("site") or {}
+    if site.get("latitude_deg") is None or site.get("longitude_deg") is None:
+        raise NoEvidence("the site is not recorded with this log (give --config): night "
+                         "cannot be told")
+    judge_from = float(row["detected_s"]) - NIGHT_OFFSET_WINDOW_S  # as the check that found it
+    times, values = offset_series(conn, judge_from - NIGHT_OFFSET_REFERENCE_S, end + _HOUR)
+    q = values.get(name, np.full(times.size, np.nan))
+    night = night_mask(times, latitude_deg=float(site["latitude_deg"]),
+                       longitude_deg=float(site["longitude_deg"]))
+    q = np.where(night, q, np.nan)
+    if not np.isfinite(q).any():
+        raise NoEvidence(f"no stored night estimates of {name or '?'} in the finding's window")
+    return _block_figure(
+        row, offset_h, lo_s, times, q, settings=NIGHT_OFFSET_SETTINGS, control=None,
+        judge_from_s=judge_from, title=f"heat-flux offset {name} at night", unit="W/m2",
+        colour=STATE_COLOURS.get(name.removeprefix("q_")[:2], "#8c564b"),
+        each="each on-line estimate at night", ylabel="offset",
+        centre="reference: median at this time of night, 5 previous days")
+
+
+def _block_figure(row: Mapping[str, Any], offset_h: float, lo_s: float, times: np.ndarray,
+                  values: np.ndarray, *, settings: ResidualSettings,
+                  control: np.ndarray | None, title: str, unit: str, colour: str, each: str,
+                  ylabel: str, centre: str, judge_from_s: float = -np.inf) -> Figure:
+    """The block CUSUM of :func:`~dsfd.estimation.diagnostics.block_change`, recomputed:
+    values, block means and reference above; the statistic and its threshold below."""
+    st = settings
+    ax_t = _Axes(offset_h, lo_s, _end_s(row) + _HOUR)
+    fig = Figure(figsize=(WIDTH_IN, 5.0), layout="constrained")
+    top, bottom = fig.subplots(2, 1, sharex=True, height_ratios=[1.6, 1.0])
+    fig.suptitle(f"#{row['finding_id']} {row['kind']}: {title}", fontsize=12, x=0.01,
+                 ha="left")
+    b = residual_blocks(times, values, settings=st, control=control)
     mid = (b.blocks + 0.5) * st.block_s
     seen = (times >= ax_t.lo_s) & (times <= ax_t.hi_s)
-    colour = STATE_COLOURS.get(reading[:2], "#8c564b")
-    top.plot(ax_t.local(times[seen]), err[seen], color="#bbbbbb", lw=0.6,
-             label="each cycle: reading − prediction")
-    top.fill_between(ax_t.local(mid), b.centre - b.scale, b.centre + b.scale, color="#dddddd",
-                     lw=0, step="mid", label="reference ± its long-run spread")
-    top.plot(ax_t.local(mid), b.centre, color="black", ls="--", lw=1.1,
-             label="reference: median at this time of day, 5 previous days")
-    top.plot(ax_t.local(mid), b.means, "o-", ms=2.5, lw=1.0, color=colour,
+    top.plot(ax_t.local(times[seen]), values[seen], color="#bbbbbb", lw=0.6, label=each)
+    # no line across hours without blocks (the days between nights, an outage)
+    gap_mid, (lo, hi, ref, means) = _broken(b.blocks, mid, b.centre - b.scale,
+                                            b.centre + b.scale, b.centre, b.means)
+    top.fill_between(ax_t.local(gap_mid), lo, hi, color="#dddddd", lw=0, step="mid",
+                     label="reference ± its long-run spread")
+    top.plot(ax_t.local(gap_mid), ref, color="black", ls="--", lw=1.1, label=centre)
+    top.plot(ax_t.local(gap_mid), means, "o-", ms=2.5, lw=1.0, color=colour,
              label=f"{st.block_s / 60:g}-min block means (the detector's input)")
-    top.set_ylabel(f"measured − predicted\n[{unit}]")
+    top.set_ylabel(f"{ylabel}\n[{unit}]")
     ax_t.marks(top, row, legend=True)
     top.legend(**OUTSIDE)
     ax_t.setup(top, label=False)
-    cs = page_cusum(b.z, k=b.k, h=st.h_sd)
+    cs = page_cusum(np.where(b.blocks * st.block_s >= judge_from_s, b.z, np.nan), k=b.k,
+                    h=st.h_sd)
     n = cs.statistic.size
-    bottom.plot(ax_t.local(mid[:n]), cs.statistic, color=colour, lw=1.3,
+    gap_mid, (stat,) = _broken(b.blocks[:n], mid[:n], cs.statistic)
+    bottom.plot(ax_t.local(gap_mid), stat, color=colour, lw=1.3,
                 label=(f"CUSUM (k = {st.k_sd:g} spreads, or {st.min_shift / 2:g} {unit} if "
                        "larger), recomputed from the stored rows" if st.min_shift else
                        f"CUSUM (k = {st.k_sd:g}), recomputed from the stored rows"))
@@ -152,6 +210,15 @@ def residual_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h: 
     bottom.legend(**OUTSIDE)
     ax_t.setup(bottom, label=True)
     return fig
+
+
+def _broken(blocks: np.ndarray, x: np.ndarray, *series: np.ndarray
+            ) -> tuple[np.ndarray, list[np.ndarray]]:
+    """``x`` and ``series`` with a NaN put between blocks that are not consecutive, so a
+    line is not drawn across the hours between them."""
+    cut = np.flatnonzero(np.diff(blocks) > 1) + 1
+    return (np.insert(np.asarray(x, float), cut, np.nan),
+            [np.insert(np.asarray(v, float), cut, np.nan) for v in series])
 
 
 def flow_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h: float) -> Figure:
@@ -337,7 +404,8 @@ def evidence_figure(conn: sqlite3.Connection, row: Mapping[str, Any], *, offset_
         "residual_shift": lambda: residual_figure(conn, row, offset_h),
         **{k: (lambda: flow_figure(conn, row, offset_h)) for k in FLOW_KINDS},
         **{k: (lambda: night_figure(conn, row, offset_h, config)) for k in NIGHT_KINDS},
-        "parameter_shift": lambda: parameter_figure(conn, row, offset_h)}
+        "parameter_shift": lambda: parameter_figure(conn, row, offset_h),
+        "night_offset_shift": lambda: night_offset_figure(conn, row, offset_h, config)}
     f = draw.get(str(row["kind"]))
     if f is None:
         return f"no figure for a {row['kind']} finding"

@@ -23,9 +23,10 @@ from dsfd.config.panel import REGIME_OPENINGS
 from dsfd.physics.solar.position import solar_position
 
 __all__ = ["CROSSCHECK_WINDOW_S", "DAMPER_SHORT", "NIGHT_AFTER_S", "NIGHT_MIN_S",
-           "NIGHT_SUN_DEG", "NIGHT_WINDOW_S", "RESIDUALS", "RESIDUAL_MIN_S",
-           "RESIDUAL_WINDOW_S", "FlowSeries", "NightSeries", "flow_series", "night_series",
-           "read_rows", "residual_series"]
+           "NIGHT_OFFSET_MIN_S", "NIGHT_OFFSET_REFERENCE_S", "NIGHT_OFFSET_WINDOW_S",
+           "NIGHT_SUN_DEG", "NIGHT_WINDOW_S",
+           "RESIDUALS", "RESIDUAL_MIN_S", "RESIDUAL_WINDOW_S", "FlowSeries", "NightSeries",
+           "flow_series", "night_mask", "night_series", "read_rows", "residual_series"]
 
 #: The cross-checks judge the last day: long enough that every path the controller uses in
 #: a day is judged, so a finding does not end at night only because no path was used.
@@ -39,6 +40,14 @@ RESIDUAL_WINDOW_S = 7 * 86400.0
 #: once 8 days are stored, on the last 3 weeks.
 NIGHT_MIN_S = 8 * 86400.0
 NIGHT_WINDOW_S = 21 * 86400.0
+#: The night offsets compare each hour of a night with the same hours of the 5 nights before,
+#: and need two of them for a reference and about three for the spread
+#: (dsfd.estimation.night_offsets.NIGHT_OFFSET_SETTINGS): they run once 4 days are stored and
+#: judge the last 7 days, reading the 6 before as references only (5 days and the spread's
+#: guard), so a block's reference is the same at every check.
+NIGHT_OFFSET_MIN_S = 4 * 86400.0
+NIGHT_OFFSET_WINDOW_S = 7 * 86400.0
+NIGHT_OFFSET_REFERENCE_S = 6 * 86400.0
 #: Night: the sun this far below the horizon [deg] (civil twilight over), and below it
 #: :data:`NIGHT_AFTER_S` before too, so the day's heat has left the panes.
 NIGHT_SUN_DEG = -6.0
@@ -168,10 +177,17 @@ def night_series(conn: sqlite3.Connection, since_s: float, until_s: float, *,
     col = {n: np.array([values[c[:2]].get(n, np.nan) for c in cycles], float)
            for n in (pane, "t_out_c", "t_room_c")}
     room = np.where(np.isfinite(col["t_room_c"]), col["t_room_c"], room_c)
-    if t.size:
-        night = ((solar_position(t, latitude_deg, longitude_deg).elevation_deg < NIGHT_SUN_DEG)
-                 & (solar_position(t - NIGHT_AFTER_S, latitude_deg,
-                                   longitude_deg).elevation_deg < 0.0))
-    else:
-        night = np.zeros(0, bool)
+    night = night_mask(t, latitude_deg=latitude_deg, longitude_deg=longitude_deg)
     return NightSeries(t, col[pane], col["t_out_c"], room, night)
+
+
+def night_mask(times_s: np.ndarray, *, latitude_deg: float, longitude_deg: float
+               ) -> np.ndarray:
+    """Night at each of ``times_s`` [s]: the sun more than :data:`NIGHT_SUN_DEG` below the
+    horizon, and below it :data:`NIGHT_AFTER_S` before (bool array)."""
+    t = np.asarray(times_s, float)
+    if not t.size:
+        return np.zeros(0, bool)
+    return ((solar_position(t, latitude_deg, longitude_deg).elevation_deg < NIGHT_SUN_DEG)
+            & (solar_position(t - NIGHT_AFTER_S, latitude_deg,
+                              longitude_deg).elevation_deg < 0.0))

@@ -28,7 +28,7 @@ from dsfd.estimation.params import LINEAR_NAMES, OFFSET_NAMES
 from dsfd.storage.schema import PARAMETER_SD_COLUMNS
 
 __all__ = ["OFFSET_SD_FLOOR_WM2", "PARAMETER_MIN_DAYS", "PARAMETER_WINDOW_S", "DailySeries",
-           "offsets_of", "parameter_series", "parameter_unit"]
+           "offset_series", "offsets_of", "parameter_series", "parameter_unit"]
 
 #: The parameter detector compares each day with the 7 days ending 2 days before it and
 #: needs 3 of them (ParameterSettings): it runs once 5 days make a series ...
@@ -55,16 +55,22 @@ def parameter_unit(name: str) -> str:
     return "" if name in LINEAR_NAMES else LOG_UNIT
 
 
+def _since_restart(conn: sqlite3.Connection, until_s: float, window_s: float) -> float:
+    """The start of the window of ``window_s`` ending at ``until_s``, or the calibration's
+    last start from its priors (a ``prior`` row) if later: what came before it is another
+    history."""
+    restart = conn.execute("SELECT MAX(time_s) FROM parameters WHERE source = 'prior' AND "
+                           "time_s < ?", (until_s,)).fetchone()[0]
+    return until_s - window_s if restart is None else max(until_s - window_s, float(restart))
+
+
 def parameter_series(conn: sqlite3.Connection, now_s: float
                      ) -> dict[str, DailySeries] | None:
     """Each θ parameter's and heat-flux offset's daily series over the 24-h days ending at
     ``now_s``; None while fewer than :data:`PARAMETER_MIN_DAYS` days make one (the detector
     does not run)."""
     until = now_s  # the last day is the last 24 h, judged whole whenever the check runs
-    restart = conn.execute("SELECT MAX(time_s) FROM parameters WHERE source = 'prior' AND "
-                           "time_s < ?", (until,)).fetchone()[0]
-    since = until - PARAMETER_WINDOW_S if restart is None else \
-        max(until - PARAMETER_WINDOW_S, float(restart))
+    since = _since_restart(conn, until, PARAMETER_WINDOW_S)
     n = len(PARAMETER_NAMES)
     stored = conn.execute(
         f"SELECT time_s, {', '.join(PARAMETER_NAMES)}, {', '.join(PARAMETER_SD_COLUMNS)}, "
@@ -98,3 +104,18 @@ def offsets_of(other: str | None) -> dict[str, float]:
         return {}
     return {k: float(v) for k, v in values.items()
             if k in OFFSET_NAMES and isinstance(v, int | float)}
+
+
+def offset_series(conn: sqlite3.Connection, since_s: float, until_s: float
+                  ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """The on-line estimates of the heat-flux offsets [W/m²] from ``since_s`` (or the
+    calibration's last start from its priors, if later) to ``until_s``: their times [s] and
+    the values per offset name (NaN where a row has none)."""
+    since = _since_restart(conn, until_s, until_s - since_s)
+    stored = conn.execute("SELECT time_s, other FROM parameters WHERE source = 'online' AND "
+                          "time_s >= ? AND time_s <= ? ORDER BY time_s",
+                          (since, until_s)).fetchall()
+    others = [offsets_of(r[1]) for r in stored]
+    return (np.array([r[0] for r in stored], float),
+            {name: np.array([o.get(name, math.nan) for o in others], float)
+             for name in OFFSET_NAMES})
