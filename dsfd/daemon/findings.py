@@ -10,7 +10,8 @@ A check, on its own SQLite connection:
    the rows of the last :data:`CROSSCHECK_WINDOW_S` (the cavity speed, the cavity,
    room and outdoor air readings, and the command in force during each step) and, once
    :data:`RESIDUAL_MIN_S` of history is stored, the one-step prediction errors of the last
-   :data:`RESIDUAL_WINDOW_S` (every :data:`RESIDUAL_EVERY_S`);
+   :data:`RESIDUAL_WINDOW_S` (every :data:`RESIDUAL_EVERY_S`; the :data:`RESIDUAL_REFERENCE_S`
+   before it as references only);
 2. runs :func:`~dsfd.estimation.crosschecks.cavity_flow_check` and
    :func:`~dsfd.estimation.diagnostics.residual_change` per output of
    :data:`WATCHED_RESIDUALS`, each block against the same hours under the same regime;
@@ -73,6 +74,7 @@ from dsfd.storage.evidence import (
     NIGHT_OFFSET_WINDOW_S,
     NIGHT_WINDOW_S,
     RESIDUAL_MIN_S,
+    RESIDUAL_REFERENCE_S,
     RESIDUAL_WINDOW_S,
     RESIDUALS,
     flow_series,
@@ -100,8 +102,8 @@ log = get_logger("dsfd.findings")
 #: How often the detectors run, on the daemon's clock [s].
 CHECK_EVERY_S = 300.0
 #: The residual CUSUM runs every hour (once RESIDUAL_MIN_S is stored): its blocks are 10 min
-#: and a step takes hours to find, and a check on a week of one-minute rows costs about
-#: 0.4 s of CPU (a dry run has no minute to spare).
+#: and a step takes hours to find, and a check on 13 days of one-minute rows (the window and
+#: its references) costs about 0.5 s of CPU (a dry run has no minute to spare).
 RESIDUAL_EVERY_S = 3600.0
 #: The night check runs every 6 h (once NIGHT_MIN_S is stored): a night is judged once it
 #: ended.
@@ -119,7 +121,7 @@ PARAMETER_EVERY_S = 3600.0
 #: and opened it again 6 h later on synthetic histories.
 PARAMETER_RELEASE_S = 86400.0
 #: The night offsets (docs/model.md#diagnostics-night-offsets) are judged every hour (a run
-#: reads a week of 10-min parameter rows, about 0.05 s of CPU), on the last
+#: reads up to 13 days of 10-min parameter rows, about 0.02 s of CPU), on the last
 #: NIGHT_OFFSET_WINDOW_S once NIGHT_OFFSET_MIN_S of history is stored.
 NIGHT_OFFSET_EVERY_S = 3600.0
 #: How often the detectors that need days of history run: (name, every [s]).
@@ -154,12 +156,14 @@ WATCHED_RESIDUALS = tuple(r for r in RESIDUALS if r[0] not in ("x4_c", "x5_c"))
 
 
 def _residual_findings(conn: sqlite3.Connection, now_s: float) -> list[Finding]:
-    times, errors, regime = residual_series(conn, now_s - RESIDUAL_WINDOW_S, now_s,
+    judge_from = now_s - RESIDUAL_WINDOW_S
+    times, errors, regime = residual_series(conn, judge_from - RESIDUAL_REFERENCE_S, now_s,
                                             WATCHED_RESIDUALS)
     out = []
     for reading, _, unit in WATCHED_RESIDUALS:
         f = residual_change(times, errors[reading], signal=reading, unit=unit,
-                            settings=residual_settings(unit), control=regime)
+                            settings=residual_settings(unit), control=regime,
+                            judge_from_s=judge_from)
         if f is not None:
             out.append(f)
     return out

@@ -283,7 +283,8 @@ def residual_blocks(times_s: np.ndarray, residuals: np.ndarray, *,
 
 def residual_change(times_s: np.ndarray, residuals: np.ndarray, *, signal: str, unit: str,
                     settings: ResidualSettings | None = None,
-                    control: np.ndarray | None = None) -> Finding | None:
+                    control: np.ndarray | None = None, judge_from_s: float = -math.inf
+                    ) -> Finding | None:
     """The first change in one output's prediction errors, or None.
 
     Parameters
@@ -301,6 +302,8 @@ def residual_change(times_s: np.ndarray, residuals: np.ndarray, *, signal: str, 
         (held by most of its residuals; an unknown control is compared with any): a lumped model's
         error differs between controls, and a control first used at an hour of the day is
         not a change of the façade.
+    judge_from_s : float, [s]
+        Blocks before it are references only (:func:`block_change`).
 
     Returns
     -------
@@ -310,7 +313,8 @@ def residual_change(times_s: np.ndarray, residuals: np.ndarray, *, signal: str, 
         (``start_s``: that block's start).
     """
     st = settings or ResidualSettings()
-    change = block_change(times_s, residuals, settings=st, control=control)
+    change = block_change(times_s, residuals, settings=st, control=control,
+                          judge_from_s=judge_from_s)
     if change is None:
         return None
     ev = change.evidence(f"residual:{signal}", unit)

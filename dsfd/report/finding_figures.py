@@ -39,6 +39,7 @@ from dsfd.storage.evidence import (
     NIGHT_OFFSET_REFERENCE_S,
     NIGHT_OFFSET_WINDOW_S,
     NIGHT_WINDOW_S,
+    RESIDUAL_REFERENCE_S,
     RESIDUAL_WINDOW_S,
     RESIDUALS,
     flow_series,
@@ -123,7 +124,8 @@ def residual_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h: 
     end = _end_s(row)
     lo_s = float(row["start_s"]) - 86400.0
     output = [o for o in RESIDUALS if o[0] == reading]
-    times, errors, regime = (residual_series(conn, float(row["detected_s"]) - RESIDUAL_WINDOW_S,
+    judge_from = float(row["detected_s"]) - RESIDUAL_WINDOW_S  # as the check that found it
+    times, errors, regime = (residual_series(conn, judge_from - RESIDUAL_REFERENCE_S,
                                              end + _HOUR, output) if output
                              else (np.zeros(0), {}, np.zeros(0)))
     err = errors.get(reading, np.zeros(0))
@@ -134,7 +136,7 @@ def residual_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h: 
                              else reading)
     return _block_figure(
         row, offset_h, lo_s, times, err, settings=residual_settings(unit), control=regime,
-        title=f"one-step prediction error of {label}", unit=unit,
+        judge_from_s=judge_from, title=f"one-step prediction error of {label}", unit=unit,
         colour=STATE_COLOURS.get(reading[:2], "#8c564b"),
         each="each cycle: reading − prediction", ylabel="measured − predicted",
         centre="reference: median at this time of day, 5 previous days")

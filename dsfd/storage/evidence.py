@@ -24,18 +24,21 @@ from dsfd.physics.solar.position import solar_position
 
 __all__ = ["CROSSCHECK_WINDOW_S", "DAMPER_SHORT", "NIGHT_AFTER_S", "NIGHT_MIN_S",
            "NIGHT_OFFSET_MIN_S", "NIGHT_OFFSET_REFERENCE_S", "NIGHT_OFFSET_WINDOW_S",
-           "NIGHT_SUN_DEG", "NIGHT_WINDOW_S",
-           "RESIDUALS", "RESIDUAL_MIN_S", "RESIDUAL_WINDOW_S", "FlowSeries", "NightSeries",
+           "NIGHT_SUN_DEG", "NIGHT_WINDOW_S", "RESIDUALS", "RESIDUAL_MIN_S",
+           "RESIDUAL_REFERENCE_S", "RESIDUAL_WINDOW_S", "FlowSeries", "NightSeries",
            "flow_series", "night_mask", "night_series", "read_rows", "residual_series"]
 
 #: The cross-checks judge the last day: long enough that every path the controller uses in
 #: a day is judged, so a finding does not end at night only because no path was used.
 CROSSCHECK_WINDOW_S = 86400.0
 #: The residual detector needs five previous days at the same time of day
-#: (ResidualSettings.reference_days) and a day of spread: it runs once six days are stored,
-#: on the last seven.
+#: (ResidualSettings.reference_days) and a day of spread: it runs once six days are stored
+#: and judges the last seven, reading the 6 days before them as references only (the 5
+#: days and the spread's 6-h guard), so a block's reference is the same at every check
+#: (dsfd.estimation.diagnostics.block_change).
 RESIDUAL_MIN_S = 6 * 86400.0
 RESIDUAL_WINDOW_S = 7 * 86400.0
+RESIDUAL_REFERENCE_S = 6 * 86400.0
 #: The night check compares each night with the 7-14 before it (NightCheckSettings): it runs
 #: once 8 days are stored, on the last 3 weeks.
 NIGHT_MIN_S = 8 * 86400.0
