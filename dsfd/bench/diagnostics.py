@@ -228,12 +228,14 @@ def recheck(state: Path, scenario: Scenario, panel: Path, work: Path
 
 
 def aalborg_findings(panel: Path, source_dir: Path) -> dict[str, float | str]:
-    """False findings of the residual detector on the real Aalborg "Cube" week.
+    """False findings of the residual detector and the night offsets on the real Aalborg
+    "Cube" week.
 
     The record (``dsfd convert-aalborg``) is replayed with the self-calibrating model as
     ``dsfd validate`` does; the residual detector with the daemon's settings runs on the
-    one-step prediction errors of each measured pane over the whole week (the daemon's
-    last check of such a week sees the same rows; the detector reports its first change
+    one-step prediction errors of each measured pane over the whole week, and the night
+    offsets on the replay's heat-flux offsets at the panel's nights (the daemon's last
+    check of such a week sees the same rows; each detector reports its first change
     anywhere in them). The record has no cavity speed and a week of nights is too short
     for the night check, so the other detectors have nothing to judge. Every finding is
     false: the façade did not change during the measurements.
@@ -241,8 +243,10 @@ def aalborg_findings(panel: Path, source_dir: Path) -> dict[str, float | str]:
     from dsfd.config import load_panel
     from dsfd.convert.aalborg import convert_aalborg
     from dsfd.estimation.diagnostics import residual_change, residual_settings
+    from dsfd.estimation.night_offsets import NIGHT_OFFSET_NAMES, night_offset_change
     from dsfd.estimation.stepdata import step_data
     from dsfd.estimation.validation import replay_scores
+    from dsfd.storage.evidence import night_mask
 
     cfg = load_panel(panel)
     steps = step_data(cfg, convert_aalborg(source_dir))
@@ -251,6 +255,13 @@ def aalborg_findings(panel: Path, source_dir: Path) -> dict[str, float | str]:
     found = [f for name, err in replay.one_step_error_k.items()
              if (f := residual_change(t, err, signal=f"{name}_c", unit="K",
                                       settings=residual_settings("K"))) is not None]
+    t_steps = steps.time_s[:-1]
+    night = night_mask(t_steps, latitude_deg=cfg.site.latitude_deg,
+                       longitude_deg=cfg.site.longitude_deg)
+    found += [f for name in NIGHT_OFFSET_NAMES
+              if name in replay.online_offsets_wm2
+              and (f := night_offset_change(t_steps, replay.online_offsets_wm2[name], night,
+                                            name=name)) is not None]
     return {"aalborg.days": float((t[-1] - t[0]) / SECONDS_PER_DAY) if t.size else 0.0,
             "aalborg.outputs": ",".join(replay.one_step_error_k),
             "aalborg.false_findings": float(len(found)),
@@ -286,7 +297,8 @@ def report(figures: dict[str, float | str]) -> str:
                      f"{float(f.get('clean_days', 0.0)):7.2f}")
     lines.append(f"false findings: {total_false:.0f} over {total_days:.2f} clean simulated days")
     if "aalborg.false_findings" in figures:
-        lines.append(f"Aalborg Cube (real, residual detector on {figures['aalborg.outputs']}): "
+        lines.append(f"Aalborg Cube (real; residual detector on {figures['aalborg.outputs']}, "
+                     "night offsets on q_x2..q_x4): "
                      f"{float(figures['aalborg.false_findings']):.0f} false findings over "
                      f"{float(figures['aalborg.days']):.1f} days"
                      + (f" ({figures['aalborg.false_kinds']})"

@@ -15,6 +15,7 @@ The physical cross-checks are in :mod:`dsfd.estimation.crosschecks`.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -353,7 +354,8 @@ class BlockChange:
 
 
 def block_change(times_s: np.ndarray, values: np.ndarray, *, settings: ResidualSettings,
-                 control: np.ndarray | None = None, judge_from_s: float = -math.inf
+                 control: np.ndarray | None = None, judge_from_s: float = -math.inf,
+                 allowance: Callable[[ResidualBlocks], np.ndarray] | None = None
                  ) -> BlockChange | None:
     """The two-sided CUSUM (:func:`page_cusum`) of the standardised blocks of
     :func:`residual_blocks` that start at or after ``judge_from_s``: its first alarm, or None.
@@ -363,11 +365,13 @@ def block_change(times_s: np.ndarray, values: np.ndarray, *, settings: ResidualS
     and the spread's guard) before it: then every judged block keeps the same reference from
     one check to the next, and as the CUSUM's origin moves later it can only lose alarms
     (the recursion is monotone in its start value), so a later check never finds a change
-    in old blocks that the earlier checks judged without one."""
+    in old blocks that the earlier checks judged without one. ``allowance``: a floor of the
+    CUSUM's allowance per block [spreads], from the blocks (NaN: none)."""
     st = settings
     b = residual_blocks(times_s, values, settings=st, control=control)
     z = np.where(b.blocks * st.block_s >= judge_from_s, b.z, np.nan)
-    cs = page_cusum(z, k=b.k, h=st.h_sd)
+    k = b.k if allowance is None else np.fmax(b.k, allowance(b))
+    cs = page_cusum(z, k=k, h=st.h_sd)
     if cs.alarm is None:
         return None
     after = slice(cs.start, cs.alarm + 1)

@@ -197,6 +197,10 @@ class ReplayScores:
         The first model's (``online`` when run) one-step prediction errors, measured minus
         predicted, NaN where the state was not measured: what the daemon's residual
         detector watches (docs/model.md#diagnostics-residuals).
+    online_offsets_wm2 : dict offset name → ndarray (n,), [W/m²]
+        The first model's heat-flux offsets in force over each step (from row k, at
+        ``steps.time_s[:-1]``): what the night offsets watch
+        (docs/model.md#diagnostics-night-offsets).
     """
 
     steps: int
@@ -210,6 +214,7 @@ class ReplayScores:
     final_theta: dict[str, np.ndarray] = field(default_factory=dict)
     one_step_time_s: np.ndarray = field(default_factory=lambda: np.empty(0))
     one_step_error_k: dict[str, np.ndarray] = field(default_factory=dict)
+    online_offsets_wm2: dict[str, np.ndarray] = field(default_factory=dict)
 
     def mae_c(self, model: str, horizon: int, state: str) -> float | None:
         """Table 2 cell; ``state`` ``"mean"`` for the mean over the states (None if absent)."""
@@ -322,7 +327,9 @@ def replay_scores(cfg: PanelConfig, steps: StepData, *, offline_theta: np.ndarra
                      if m in ("online", "offline")},
         one_step_time_s=steps.time_s[starts + 1],
         one_step_error_k={STATES[j]: steps.y_k[starts + 1, j] - preds[names[0]][0][:, 1, j]
-                          for j in present})
+                          for j in present},
+        online_offsets_wm2={name: theta_k[0, :, N_PARAMS + i]
+                            for i, name in enumerate(FIT_NAMES[N_PARAMS:])})
 
 
 def _scored_starts(steps: StepData, h_max: int, warmup_h: float) -> np.ndarray:

@@ -24,12 +24,17 @@ from matplotlib.figure import Figure
 from dsfd.config.panel import Parameters
 from dsfd.estimation.crosschecks import FlowCheckSettings, NightCheckSettings, nightly_offsets
 from dsfd.estimation.diagnostics import (
+    ResidualBlocks,
     ResidualSettings,
     page_cusum,
     residual_blocks,
     residual_settings,
 )
-from dsfd.estimation.night_offsets import NIGHT_OFFSET_SETTINGS
+from dsfd.estimation.night_offsets import (
+    NIGHT_OFFSET_SETTINGS,
+    NIGHT_SPREAD_ALLOWANCE,
+    night_spread,
+)
 from dsfd.estimation.parameter_watch import LOG_UNIT
 from dsfd.estimation.params import OFFSET_NAMES
 from dsfd.report.kpis import zone_name
@@ -164,6 +169,8 @@ def night_offset_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset
     return _block_figure(
         row, offset_h, lo_s, times, q, settings=NIGHT_OFFSET_SETTINGS, control=None,
         judge_from_s=judge_from, title=f"heat-flux offset {name} at night", unit="W/m2",
+        allowance=lambda b: NIGHT_SPREAD_ALLOWANCE * night_spread(b) / b.scale,
+        allowance_label=f" or {NIGHT_SPREAD_ALLOWANCE:g}× the recent nights' departures",
         colour=STATE_COLOURS.get(name.removeprefix("q_")[:2], "#8c564b"),
         each="each on-line estimate at night", ylabel="offset",
         centre="reference: median at this time of night, 5 previous days")
@@ -172,7 +179,9 @@ def night_offset_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset
 def _block_figure(row: Mapping[str, Any], offset_h: float, lo_s: float, times: np.ndarray,
                   values: np.ndarray, *, settings: ResidualSettings,
                   control: np.ndarray | None, title: str, unit: str, colour: str, each: str,
-                  ylabel: str, centre: str, judge_from_s: float = -np.inf) -> Figure:
+                  ylabel: str, centre: str, judge_from_s: float = -np.inf,
+                  allowance: Callable[[ResidualBlocks], np.ndarray] | None = None,
+                  allowance_label: str = "") -> Figure:
     """The block CUSUM of :func:`~dsfd.estimation.diagnostics.block_change`, recomputed:
     values, block means and reference above; the statistic and its threshold below."""
     st = settings
@@ -197,13 +206,15 @@ def _block_figure(row: Mapping[str, Any], offset_h: float, lo_s: float, times: n
     ax_t.marks(top, row, legend=True)
     top.legend(**OUTSIDE)
     ax_t.setup(top, label=False)
-    cs = page_cusum(np.where(b.blocks * st.block_s >= judge_from_s, b.z, np.nan), k=b.k,
+    k = b.k if allowance is None else np.fmax(b.k, allowance(b))
+    cs = page_cusum(np.where(b.blocks * st.block_s >= judge_from_s, b.z, np.nan), k=k,
                     h=st.h_sd)
     n = cs.statistic.size
     gap_mid, (stat,) = _broken(b.blocks[:n], mid[:n], cs.statistic)
     bottom.plot(ax_t.local(gap_mid), stat, color=colour, lw=1.3,
-                label=(f"CUSUM (k = {st.k_sd:g} spreads, or {st.min_shift / 2:g} {unit} if "
-                       "larger), recomputed from the stored rows" if st.min_shift else
+                label=(f"CUSUM (k = {st.k_sd:g} spreads, or {st.min_shift / 2:g} {unit}"
+                       f"{allowance_label} if larger), recomputed from the stored rows"
+                       if st.min_shift else
                        f"CUSUM (k = {st.k_sd:g}), recomputed from the stored rows"))
     bottom.axhline(st.h_sd, color="black", ls="--", lw=1.0, label=f"threshold h = {st.h_sd:g}")
     bottom.set_ylim(bottom=0)

@@ -10,9 +10,11 @@ import pytest
 from dsfd.cli import main
 from dsfd.config import load_panel
 from dsfd.convert.aalborg import AalborgFormatError, convert_aalborg
+from dsfd.estimation.night_offsets import NIGHT_OFFSET_NAMES, night_offset_change
 from dsfd.estimation.stepdata import step_data
 from dsfd.estimation.validation import replay_scores
 from dsfd.measured import iso_utc
+from dsfd.storage.evidence import night_mask
 from dsfd.storage.measured_csv import read_measured
 from tests.conftest import DATA, PANELS
 
@@ -93,3 +95,12 @@ def test_self_calibration_halves_the_uncalibrated_error_and_beats_persistence(cu
         mean = out.horizons[h].mean_mae_c
         assert mean["online"] <= 0.5 * mean["uncalibrated"], h
         assert mean["online"] < mean["persistence"], h
+    # issue 38: the night offsets on the replay's heat-flux offsets find nothing (the façade
+    # did not change during the measurements; the offsets moved by up to 20 W/m² from one
+    # night to the next, far more than on the simulated bench)
+    t = steps.time_s[:-1]
+    night = night_mask(t, latitude_deg=cube.site.latitude_deg,
+                       longitude_deg=cube.site.longitude_deg)
+    assert np.count_nonzero(night) * steps.step_s > 6 * 6 * 3600.0  # six nights of 6 h or more
+    for name in NIGHT_OFFSET_NAMES:
+        assert night_offset_change(t, out.online_offsets_wm2[name], night, name=name) is None

@@ -33,8 +33,8 @@ NIGHT_UTC_H = (11.0, 21.0)
 DRIFT_WM2_PER_DAY = 8.0
 
 
-def _history(seed: int, *, drift_from: float | None = None, day_step_from: float | None = None
-             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _history(seed: int, *, drift_from: float | None = None, day_step_from: float | None = None,
+             night_level_wm2: float = 0.5) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     rng = np.random.default_rng(seed)
     t = T0 + STEP * np.arange(int(N_DAYS * DAY / STEP))
     hour = (t % DAY) / 3600.0
@@ -43,7 +43,7 @@ def _history(seed: int, *, drift_from: float | None = None, day_step_from: float
     ar = np.zeros(t.size)
     for i in range(1, t.size):
         ar[i] = 0.9 * ar[i - 1] + rng.normal(0.0, 0.4 * np.sqrt(1 - 0.81))
-    level = rng.uniform(-0.5, 0.5, N_DAYS + 1)[day]
+    level = rng.uniform(-night_level_wm2, night_level_wm2, N_DAYS + 1)[day]
     sun = np.clip(np.sin(np.pi * ((hour - 23.0) % 24.0) / 10.0), 0.0, None) * ~night
     swing = rng.uniform(-20.0, 20.0, N_DAYS + 1)[day] * sun
     q = level + ar + swing
@@ -146,3 +146,19 @@ def test_each_judged_block_keeps_its_reference_from_one_check_to_the_next():
                   and (k + 1) * NIGHT_OFFSET_SETTINGS.block_s <= now]
         assert len(common) > 15
         assert all(before[k] == after[k] for k in common) is same
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_nights_whose_level_wanders_widely_raise_the_allowance_not_a_finding(seed):
+    """On the real Aalborg week the offsets at night moved by up to 20 W/m² from one night
+    to the next. Nights whose level wanders uniformly within ±12 W/m²: no finding, because
+    the allowance follows the recent nights' departures; on the same history with quiet
+    nights (±0.5 W/m²) the allowance is the 2 W/m² floor and a 15 W/m² step (a sensor 1 K
+    off) is found in its first night."""
+    t, q, night = _history(seed, night_level_wm2=12.0)
+    assert night_offset_change(t, q, night, name="q_x2") is None
+    onset = T0 + 8 * DAY + 12.5 * 3600.0
+    t, q, night = _history(seed)
+    q = q + np.where(t >= onset, 15.0, 0.0)
+    f = night_offset_change(t, q, night, name="q_x3")
+    assert f is not None and onset < f.detected_s <= onset + 8 * 3600.0
