@@ -47,9 +47,10 @@ NIGHT_OFFSET_NAMES = ("q_x2", "q_x3", "q_x4")
 #: 5 days that end 6 h before it (at least 24: about three nights). 30-min blocks of hourly
 #: updates alternate with empty ones, which hides their correlation from the long-run spread.
 #: The smallest shift worth a finding is 4 W/m² (a sensor about 0.25 K off on the inner
-#: pane), whatever the spread: a clean night's level wanders by 1–2 W/m² from the nights
-#: before, and with 2 W/m² one of 12 synthetic clean histories whose nightly level wanders
-#: uniformly within ±1 W/m² raised a finding. The spread is at least 0.5 W/m².
+#: pane; the allowance is at least half of it), whatever the spread: a clean night's level
+#: wanders by 1–2 W/m² from the nights before, and with a smallest shift of 2 W/m² one of 12
+#: synthetic clean histories whose nightly level wanders uniformly within ±1 W/m² raised a
+#: finding when checked hourly. The spread is at least 0.5 W/m².
 NIGHT_OFFSET_SETTINGS = ResidualSettings(
     block_s=3600.0, period_blocks=24, reference_days=5, half_width_blocks=1,
     min_reference_blocks=6, guard_blocks=6, min_scale_blocks=24, min_block_samples=1,

@@ -24,10 +24,6 @@ from matplotlib.figure import Figure
 from dsfd.config.panel import Parameters
 from dsfd.estimation.crosschecks import FlowCheckSettings, NightCheckSettings, nightly_offsets
 from dsfd.estimation.diagnostics import (
-    ResidualBlocks,
-    ResidualSettings,
-    page_cusum,
-    residual_blocks,
     residual_settings,
 )
 from dsfd.estimation.night_offsets import (
@@ -37,6 +33,7 @@ from dsfd.estimation.night_offsets import (
 )
 from dsfd.estimation.parameter_watch import LOG_UNIT
 from dsfd.estimation.params import OFFSET_NAMES
+from dsfd.report.cusum_figures import block_figure
 from dsfd.report.kpis import zone_name
 from dsfd.report.plotting import OUTSIDE, STATE_COLOURS, STATE_LABELS, WIDTH_IN
 from dsfd.storage.evidence import (
@@ -139,8 +136,9 @@ def residual_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h: 
                          "finding's window")
     label = STATE_LABELS.get(reading[:2], "cavity air speed" if reading == "v_cav_ms"
                              else reading)
-    return _block_figure(
-        row, offset_h, lo_s, times, err, settings=residual_settings(unit), control=regime,
+    return block_figure(
+        row, _Axes(offset_h, lo_s, end + _HOUR), times, err, settings=residual_settings(unit),
+        control=regime,
         judge_from_s=judge_from, title=f"one-step prediction error of {label}", unit=unit,
         colour=STATE_COLOURS.get(reading[:2], "#8c564b"),
         each="each cycle: reading − prediction", ylabel="measured − predicted",
@@ -166,72 +164,15 @@ def night_offset_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset
     q = np.where(night, q, np.nan)
     if not np.isfinite(q).any():
         raise NoEvidence(f"no stored night estimates of {name or '?'} in the finding's window")
-    return _block_figure(
-        row, offset_h, lo_s, times, q, settings=NIGHT_OFFSET_SETTINGS, control=None,
+    return block_figure(
+        row, _Axes(offset_h, lo_s, end + _HOUR), times, q, settings=NIGHT_OFFSET_SETTINGS,
+        control=None,
         judge_from_s=judge_from, title=f"heat-flux offset {name} at night", unit="W/m2",
         allowance=lambda b: NIGHT_SPREAD_ALLOWANCE * night_spread(b) / b.scale,
-        allowance_label=f" or {NIGHT_SPREAD_ALLOWANCE:g}× the recent nights' departures",
+        allowance_label=f",\nor {NIGHT_SPREAD_ALLOWANCE:g}× the recent nights' departures,",
         colour=STATE_COLOURS.get(name.removeprefix("q_")[:2], "#8c564b"),
         each="each on-line estimate at night", ylabel="offset",
         centre="reference: median at this time of night, 5 previous days")
-
-
-def _block_figure(row: Mapping[str, Any], offset_h: float, lo_s: float, times: np.ndarray,
-                  values: np.ndarray, *, settings: ResidualSettings,
-                  control: np.ndarray | None, title: str, unit: str, colour: str, each: str,
-                  ylabel: str, centre: str, judge_from_s: float = -np.inf,
-                  allowance: Callable[[ResidualBlocks], np.ndarray] | None = None,
-                  allowance_label: str = "") -> Figure:
-    """The block CUSUM of :func:`~dsfd.estimation.diagnostics.block_change`, recomputed:
-    values, block means and reference above; the statistic and its threshold below."""
-    st = settings
-    ax_t = _Axes(offset_h, lo_s, _end_s(row) + _HOUR)
-    fig = Figure(figsize=(WIDTH_IN, 5.0), layout="constrained")
-    top, bottom = fig.subplots(2, 1, sharex=True, height_ratios=[1.6, 1.0])
-    fig.suptitle(f"#{row['finding_id']} {row['kind']}: {title}", fontsize=12, x=0.01,
-                 ha="left")
-    b = residual_blocks(times, values, settings=st, control=control)
-    mid = (b.blocks + 0.5) * st.block_s
-    seen = (times >= ax_t.lo_s) & (times <= ax_t.hi_s)
-    top.plot(ax_t.local(times[seen]), values[seen], color="#bbbbbb", lw=0.6, label=each)
-    # no line across hours without blocks (the days between nights, an outage)
-    gap_mid, (lo, hi, ref, means) = _broken(b.blocks, mid, b.centre - b.scale,
-                                            b.centre + b.scale, b.centre, b.means)
-    top.fill_between(ax_t.local(gap_mid), lo, hi, color="#dddddd", lw=0, step="mid",
-                     label="reference ± its long-run spread")
-    top.plot(ax_t.local(gap_mid), ref, color="black", ls="--", lw=1.1, label=centre)
-    top.plot(ax_t.local(gap_mid), means, "o-", ms=2.5, lw=1.0, color=colour,
-             label=f"{st.block_s / 60:g}-min block means (the detector's input)")
-    top.set_ylabel(f"{ylabel}\n[{unit}]")
-    ax_t.marks(top, row, legend=True)
-    top.legend(**OUTSIDE)
-    ax_t.setup(top, label=False)
-    k = b.k if allowance is None else np.fmax(b.k, allowance(b))
-    cs = page_cusum(np.where(b.blocks * st.block_s >= judge_from_s, b.z, np.nan), k=k,
-                    h=st.h_sd)
-    n = cs.statistic.size
-    gap_mid, (stat,) = _broken(b.blocks[:n], mid[:n], cs.statistic)
-    bottom.plot(ax_t.local(gap_mid), stat, color=colour, lw=1.3,
-                label=(f"CUSUM (k = {st.k_sd:g} spreads, or {st.min_shift / 2:g} {unit}"
-                       f"{allowance_label} if larger), recomputed from the stored rows"
-                       if st.min_shift else
-                       f"CUSUM (k = {st.k_sd:g}), recomputed from the stored rows"))
-    bottom.axhline(st.h_sd, color="black", ls="--", lw=1.0, label=f"threshold h = {st.h_sd:g}")
-    bottom.set_ylim(bottom=0)
-    bottom.set_ylabel("CUSUM statistic\n[long-run sd]")
-    ax_t.marks(bottom, row, legend=False)
-    bottom.legend(**OUTSIDE)
-    ax_t.setup(bottom, label=True)
-    return fig
-
-
-def _broken(blocks: np.ndarray, x: np.ndarray, *series: np.ndarray
-            ) -> tuple[np.ndarray, list[np.ndarray]]:
-    """``x`` and ``series`` with a NaN put between blocks that are not consecutive, so a
-    line is not drawn across the hours between them."""
-    cut = np.flatnonzero(np.diff(blocks) > 1) + 1
-    return (np.insert(np.asarray(x, float), cut, np.nan),
-            [np.insert(np.asarray(v, float), cut, np.nan) for v in series])
 
 
 def flow_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h: float) -> Figure:
