@@ -196,12 +196,15 @@ def test_stroke_reaches_every_louver_step_and_regime_and_returns(
             dampers = [m["target"]["or_pct"] for m in moves if m["stage"] == "damper"]
             assert dampers == [0.0, 25.0, 50.0, 75.0, 100.0]
             # Read back through the feedback (the motor model's position), and timed: no
-            # move can end before the motor has travelled (less the tolerance).
+            # move can end before the motor has travelled, less the tolerance and half the
+            # feedback register's step (the register rounds the position: on a loaded CI run
+            # an 18° louver move was read within 2° after 15.6° of travel, 0.0865 s at 180°/s).
             previous = START
             for m in moves:
                 for name, target in m["target"].items():
                     assert m["feedback"][name] == pytest.approx(target, abs=2.0), m
-                    travel = abs(target - previous[name]) - (2.0 if name != "afr" else 0.0)
+                    slack = 2.0 + 0.5 * FEEDBACK[name].get("scale", 1.0) if name != "afr" else 0.0
+                    travel = abs(target - previous[name]) - slack
                     assert m["time_s"] >= max(0.0, travel) / RATES[name] * 0.999, m
                 previous = m["target"]
             # The Modbus server saw each louver step written (FC 6 to holding 100).
