@@ -16,6 +16,7 @@ The physical cross-checks are in :mod:`dsfd.estimation.crosschecks`.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -33,7 +34,7 @@ from dsfd.estimation.finding import (
 
 __all__ = ["MAD_TO_SD", "TEMPERATURE_MIN_SHIFT_K", "BlockChange", "Cusum", "Evidence", "Finding",
            "ResidualBlocks", "ResidualSettings", "block_change", "block_labels", "block_means",
-           "cusum_confidence", "page_cusum", "residual_blocks", "residual_change",
+           "cusum_confidence", "judged_blocks", "page_cusum", "residual_blocks", "residual_change",
            "residual_settings"]
 
 
@@ -264,10 +265,9 @@ def block_change(times_s: np.ndarray, values: np.ndarray, *, settings: ResidualS
     in old blocks that the earlier checks judged without one. ``allowance``: a floor of the
     CUSUM's allowance per block [spreads], from the blocks (NaN: none)."""
     st = settings
-    b = residual_blocks(times_s, values, settings=st, control=control)
-    z = np.where(b.blocks * st.block_s >= judge_from_s, b.z, np.nan)
-    k = b.k if allowance is None else np.fmax(b.k, allowance(b))
-    cs = page_cusum(z, k=k, h=st.h_sd)
+    b = judged_blocks(times_s, values, settings=st, control=control,
+                      judge_from_s=judge_from_s, allowance=allowance)
+    cs = page_cusum(b.z, k=b.k, h=st.h_sd)
     if cs.alarm is None:
         return None
     after = slice(cs.start, cs.alarm + 1)
@@ -277,6 +277,18 @@ def block_change(times_s: np.ndarray, values: np.ndarray, *, settings: ResidualS
                        detected_s=min(float((b.blocks[cs.alarm] + 1) * st.block_s),
                                       _last_time(times_s, values)),
                        statistic=float(cs.statistic[-1]), threshold=st.h_sd)
+
+
+def judged_blocks(times_s: np.ndarray, values: np.ndarray, *, settings: ResidualSettings,
+                  control: np.ndarray | None = None, judge_from_s: float = -math.inf,
+                  allowance: Callable[[ResidualBlocks], np.ndarray] | None = None
+                  ) -> ResidualBlocks:
+    """:func:`residual_blocks` as :func:`block_change` runs its CUSUM on them: ``z`` NaN
+    before ``judge_from_s`` and ``k`` at least ``allowance`` (what ``dsfd report`` draws)."""
+    b = residual_blocks(times_s, values, settings=settings, control=control)
+    z = np.where(b.blocks * settings.block_s >= judge_from_s, b.z, np.nan)
+    k = b.k if allowance is None else np.fmax(b.k, allowance(b))
+    return dataclasses.replace(b, z=z, k=k)
 
 
 def _last_time(times_s: np.ndarray, values: np.ndarray) -> float:

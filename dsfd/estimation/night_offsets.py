@@ -31,7 +31,7 @@ from dsfd.estimation.diagnostics import (
 )
 
 __all__ = ["NIGHT_OFFSET_NAMES", "NIGHT_OFFSET_SETTINGS", "NIGHT_SPREAD_ALLOWANCE",
-           "night_offset_change", "night_spread"]
+           "night_allowance", "night_offset_change", "night_spread"]
 
 #: The offsets judged at night: the inner panes and the louver. Not the exterior pane's
 #: q_x1: at night it takes up the long-wave exchange with the sky, whose model (clear sky,
@@ -94,6 +94,13 @@ def night_spread(blocks: ResidualBlocks, settings: ResidualSettings = NIGHT_OFFS
     return out
 
 
+def night_allowance(blocks: ResidualBlocks,
+                    settings: ResidualSettings = NIGHT_OFFSET_SETTINGS) -> np.ndarray:
+    """The floor of the CUSUM's allowance per block [spreads]:
+    :data:`NIGHT_SPREAD_ALLOWANCE` × :func:`night_spread` over the block's spread."""
+    return NIGHT_SPREAD_ALLOWANCE * night_spread(blocks, settings) / blocks.scale
+
+
 _NODE = {"q_x2": ("the inner glazing's cavity-side pane", "x2"),
          "q_x3": ("the inner (room-side) pane", "x3"),
          "q_x4": ("the louver", "x4")}
@@ -139,8 +146,7 @@ def night_offset_change(times_s: np.ndarray, values: np.ndarray, night: np.ndarr
     """
     v = np.where(np.asarray(night, bool), np.asarray(values, float), np.nan)
     change = block_change(times_s, v, settings=settings, judge_from_s=judge_from_s,
-                          allowance=lambda b: NIGHT_SPREAD_ALLOWANCE * night_spread(b, settings)
-                          / b.scale)
+                          allowance=lambda b: night_allowance(b, settings))
     if change is None:
         return None
     ev = change.evidence(f"night:{name}", "W/m2")

@@ -14,8 +14,8 @@ from matplotlib.figure import Figure
 from dsfd.estimation.diagnostics import (
     ResidualBlocks,
     ResidualSettings,
+    judged_blocks,
     page_cusum,
-    residual_blocks,
 )
 from dsfd.report.plotting import OUTSIDE, WIDTH_IN
 
@@ -49,7 +49,8 @@ def block_figure(row: Mapping[str, Any], ax_t: TimeAxes, times: np.ndarray,
     top, bottom = fig.subplots(2, 1, sharex=True, height_ratios=[1.6, 1.0])
     fig.suptitle(f"#{row['finding_id']} {row['kind']}: {title}", fontsize=12, x=0.01,
                  ha="left")
-    b = residual_blocks(times, values, settings=st, control=control)
+    b = judged_blocks(times, values, settings=st, control=control, judge_from_s=judge_from_s,
+                      allowance=allowance)
     mid = (b.blocks + 0.5) * st.block_s
     seen = (times >= ax_t.lo_s) & (times <= ax_t.hi_s)
     top.plot(ax_t.local(times[seen]), values[seen], color="#bbbbbb", lw=0.6, label=each)
@@ -65,9 +66,7 @@ def block_figure(row: Mapping[str, Any], ax_t: TimeAxes, times: np.ndarray,
     ax_t.marks(top, row, legend=True)
     top.legend(**OUTSIDE)
     ax_t.setup(top, label=False)
-    k = b.k if allowance is None else np.fmax(b.k, allowance(b))
-    cs = page_cusum(np.where(b.blocks * st.block_s >= judge_from_s, b.z, np.nan), k=k,
-                    h=st.h_sd)
+    cs = page_cusum(b.z, k=b.k, h=st.h_sd)
     n = cs.statistic.size
     gap_mid, (stat,) = broken(b.blocks[:n], mid[:n], cs.statistic)
     bottom.plot(ax_t.local(gap_mid), stat, color=colour, lw=1.3,

@@ -29,7 +29,7 @@ from dsfd.estimation.diagnostics import (
 from dsfd.estimation.night_offsets import (
     NIGHT_OFFSET_SETTINGS,
     NIGHT_SPREAD_ALLOWANCE,
-    night_spread,
+    night_allowance,
 )
 from dsfd.estimation.parameter_watch import LOG_UNIT
 from dsfd.estimation.params import OFFSET_NAMES
@@ -168,7 +168,7 @@ def night_offset_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset
         row, _Axes(offset_h, lo_s, end + _HOUR), times, q, settings=NIGHT_OFFSET_SETTINGS,
         control=None,
         judge_from_s=judge_from, title=f"heat-flux offset {name} at night", unit="W/m2",
-        allowance=lambda b: NIGHT_SPREAD_ALLOWANCE * night_spread(b) / b.scale,
+        allowance=night_allowance,
         allowance_label=f",\nor {NIGHT_SPREAD_ALLOWANCE:g}× the recent nights' departures,",
         colour=STATE_COLOURS.get(name.removeprefix("q_")[:2], "#8c564b"),
         each="each on-line estimate at night", ylabel="offset",

@@ -83,10 +83,8 @@ def parameter_series(conn: sqlite3.Connection, now_s: float
         if name not in LINEAR_NAMES:  # the fitting coordinate, in which the sd is given
             value = np.log(np.where(value > 0, value, np.nan))
         series[name] = daily_estimates(rows[:, 0], value, rows[:, 1 + n + i], end_s=until)
-    others = [offsets_of(r[-1]) for r in stored]
     floor = np.full(len(stored), OFFSET_SD_FLOOR_WM2)
-    for name in OFFSET_NAMES:
-        value = np.array([o.get(name, math.nan) for o in others], float)
+    for name, value in _offset_columns([r[-1] for r in stored]).items():
         series[name] = daily_estimates(rows[:, 0], value, floor, end_s=until)
     if max(t.size for t, _, _ in series.values()) < PARAMETER_MIN_DAYS:
         return None
@@ -115,7 +113,12 @@ def offset_series(conn: sqlite3.Connection, since_s: float, until_s: float
     stored = conn.execute("SELECT time_s, other FROM parameters WHERE source = 'online' AND "
                           "time_s >= ? AND time_s <= ? ORDER BY time_s",
                           (since, until_s)).fetchall()
-    others = [offsets_of(r[1]) for r in stored]
     return (np.array([r[0] for r in stored], float),
-            {name: np.array([o.get(name, math.nan) for o in others], float)
-             for name in OFFSET_NAMES})
+            _offset_columns([r[1] for r in stored]))
+
+
+def _offset_columns(others: list[str | None]) -> dict[str, np.ndarray]:
+    """Per offset name, its value in each ``other`` JSON of :func:`offsets_of` (NaN: none)."""
+    parsed = [offsets_of(o) for o in others]
+    return {name: np.array([o.get(name, math.nan) for o in parsed], float)
+            for name in OFFSET_NAMES}
