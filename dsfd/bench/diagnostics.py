@@ -157,6 +157,7 @@ def bench_diagnostics(config: Path, *, seeds: Sequence[int], seasons: Sequence[s
         if on_figures:
             on_figures(dict(figures))
     replayed = 0
+    missing: list[str] = []
     with tempfile.TemporaryDirectory(prefix="dsfd-bench-diag-") as tmp:
         root = keep or Path(tmp)
         root.mkdir(parents=True, exist_ok=True)
@@ -170,6 +171,7 @@ def bench_diagnostics(config: Path, *, seeds: Sequence[int], seasons: Sequence[s
                     key = f"{season}.{scenario.name}.seed{seed}"
                     if rechecked is not None:
                         if not (rechecked / key / "timeseries.sqlite").exists():
+                            missing.append(key)
                             continue  # not kept: that run was not made
                         if progress:
                             progress(f"{key}: replaying the detectors over {rechecked / key}")
@@ -186,8 +188,9 @@ def bench_diagnostics(config: Path, *, seeds: Sequence[int], seasons: Sequence[s
                         on_figures(dict(figures))
     if rechecked is not None and not replayed:
         raise ValueError(f"--recheck {rechecked}: no kept run of these seasons, scenarios and "
-                         "seeds there (a run is a <season>.<scenario>.seed<N> folder with its "
-                         "timeseries.sqlite, as --keep-state leaves it)")
+                         f"seeds there (looked for {', '.join(missing)}; a run is a "
+                         "<season>.<scenario>.seed<N> folder with its timeseries.sqlite, as "
+                         "--keep-state leaves it)")
     return figures
 
 

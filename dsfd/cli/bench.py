@@ -177,8 +177,7 @@ def _bench_identify(args: argparse.Namespace) -> dict[str, Any]:
 def _bench_diagnostics(args: argparse.Namespace) -> dict[str, Any]:
     from dsfd.bench.diagnostics import SEASONS, bench_diagnostics, report
 
-    seeds = ((1, 2, 3) if args.seeds is None else
-             tuple(range(1, args.seeds + 1)) if isinstance(args.seeds, int) else args.seeds)
+    seeds = diagnostics_seeds(args.seeds, args.seed)
     figures = bench_diagnostics(
         args.config, seeds=seeds, clean_days=10.0 if args.days is None else args.days,
         seasons=SEASONS if args.seasons is None else tuple(
@@ -232,8 +231,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "training day; plant-velocity: the paper's 8-11 Dec 2008, or with "
                    "--weather from the record's second day to its end; closed-loop: 1 scored "
                    "day per case; identify: 3 days per seed; diagnostics: the clean run's 10 days)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the target's randomness "
-                   "(identify: the first seed of --seeds)")
+    p.add_argument("--seed", type=int, default=None, help="seed of the target's "
+                   "randomness (default 0; identify, closed-loop and diagnostics: the first "
+                   "seed of a count --seeds; diagnostics alone: run that seed)")
     p.add_argument("--cases", type=int, default=200,
                    help="control: random decision problems judged against brute force")
     p.add_argument("--seeds", type=_seeds, default=None,
@@ -241,8 +241,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "10); paper-tables: run seeds 0..N-1 and print the per-seed cavity-speed "
                    "table; identify and closed-loop: run seeds SEED..SEED+N-1 (identify: "
                    "default 5); closed-loop also takes a list such as 1,2,3, and prints the "
-                   "share per case and seed; diagnostics: seeds 1..N or a list (default "
-                   "1,2,3)")
+                   "share per case and seed; diagnostics: seeds 1..N (SEED..SEED+N-1 with "
+                   "--seed) or a list (default 1,2,3)")
     p.add_argument("--oracle-cache", type=Path, default=None, metavar="FILE",
                    help="closed-loop: take the plant oracle's figures from FILE where it has "
                    "them for the case, seed, days, weather and panel, and store new ones there "
@@ -309,6 +309,19 @@ def _identify_and_diagnostics_options(p: argparse.ArgumentParser) -> None:
                    "replayed with the self-calibrating model")
 
 
+def diagnostics_seeds(seeds: int | tuple[int, ...] | None, seed: int | None
+                      ) -> tuple[int, ...]:
+    """The seeds ``bench diagnostics`` runs: a list as given; a count N from ``--seed`` on
+    (SEED..SEED+N-1, as closed-loop and identify take it), from 1 without it; ``--seed``
+    alone, that seed; neither, 1, 2 and 3 (the issue's)."""
+    if isinstance(seeds, tuple):
+        return seeds
+    first = 1 if seed is None else seed
+    if seeds is None:
+        return (1, 2, 3) if seed is None else (seed,)
+    return tuple(range(first, first + seeds))
+
+
 def _seeds(text: str) -> int | tuple[int, ...]:
     """``--seeds``: a count N (seeds 0..N-1) or a comma-separated list of seeds."""
     try:
@@ -330,6 +343,8 @@ def _write_json(path: Path, target: str, figures: dict[str, Any]) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.seed is None and args.target != "diagnostics":  # diagnostics: see diagnostics_seeds
+        args.seed = 0
     if isinstance(args.seeds, tuple):
         if args.target not in ("closed-loop", "diagnostics"):
             print(f"dsfd bench {args.target}: --seeds takes a count N (seeds 0..N-1); a list "

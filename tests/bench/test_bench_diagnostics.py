@@ -18,6 +18,7 @@ from pathlib import Path
 import pytest
 
 from dsfd.bench.diagnostics import Scenario, report, scenarios, score
+from dsfd.cli.bench import diagnostics_seeds
 from dsfd.storage.timeseries import Store
 from tests.daemon.harness import ROOT, dsfd_command
 
@@ -159,6 +160,29 @@ def test_a_recheck_of_a_folder_without_kept_runs_is_an_error_naming_it(tmp_path:
                           cwd=ROOT, capture_output=True, text=True, timeout=120, check=False)
     assert done.returncode == 2, done.stdout
     assert f"--recheck {tmp_path}: no kept run" in done.stderr, done.stderr
+    assert "looked for winter.screen.seed1;" in done.stderr, done.stderr
+
+
+@pytest.mark.parametrize(("seeds", "seed", "expected"), [
+    (None, None, (1, 2, 3)),        # the issue's seeds
+    (2, None, (1, 2)),              # a count from 1
+    (None, 2, (2,)),                # --seed alone: that seed
+    (2, 3, (3, 4)),                 # a count from --seed, as closed-loop and identify take it
+    ((2, 5), 7, (2, 5)),            # a list as given
+])
+def test_the_seeds_a_diagnostics_bench_runs(seeds, seed, expected) -> None:
+    assert diagnostics_seeds(seeds, seed) == expected
+
+
+def test_seed_alone_runs_that_seed_and_says_so(tmp_path: Path) -> None:
+    """``--seed 2`` means seed 2 (a count ``--seeds 2`` would also run seed 1): the recheck
+    of an empty folder names what it looked for."""
+    done = subprocess.run(dsfd_command("bench", "diagnostics", "--seed", "2", "--seasons",
+                                       "winter", "--scenarios", "screen,tc-offset", "--recheck",
+                                       str(tmp_path)),
+                          cwd=ROOT, capture_output=True, text=True, timeout=120, check=False)
+    assert done.returncode == 2, done.stdout
+    assert "looked for winter.tc-offset.seed2, winter.screen.seed2;" in done.stderr, done.stderr
 
 
 def test_a_stopped_bench_leaves_no_daemon_behind(tmp_path: Path) -> None:
