@@ -322,7 +322,8 @@ class _WindowObjective:
             xj = x.copy()
             xj[j] += step[j]
             rows.append(self.theta_of(xj))
-        pert = self.problem.residuals_of(self.problem.predict(np.array(rows)))
+        pert = self.problem.residuals_of(self.problem.predict(np.array(rows),
+                                                              near=self.theta_of(x)))
         return ((pert - e[None, :]) / step[:, None]).T * slope[:, None]
 
 

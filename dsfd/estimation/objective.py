@@ -42,6 +42,8 @@ OUTPUTS = ("x1", "x2", "x3", "x4", "x5", "v")
 #: the output change of the finite-difference step (dsfd.estimation.fit.FD_STEP), far
 #: below the sensors' resolution, and about half the coupling iterations of the default.
 COUPLING_TOL_K = 1e-4
+#: Single-θ rollouts kept as warm starts (the fit's latest accepted and trial points).
+WARM_KEPT = 4
 N_OUT = len(OUTPUTS)
 
 
@@ -86,6 +88,11 @@ class WindowProblem:
     regimes: np.ndarray
     horizon: int
     scale: np.ndarray
+    #: Cavity temperatures and coupling slopes (S, H) of the latest single-θ rollouts, by
+    #: the θ's bytes: the warm start of :meth:`predict`'s ``near`` (shared by the copies
+    #: :meth:`only` and :meth:`rescaled` make, whose rollouts are the same).
+    warm: dict[bytes, tuple[np.ndarray, np.ndarray]] = dataclasses.field(
+        default_factory=dict, repr=False)
 
     @property
     def n_starts(self) -> int:
@@ -104,13 +111,18 @@ class WindowProblem:
         """Residuals per output."""
         return {name: int(self.mask[..., j].sum()) for j, name in enumerate(OUTPUTS)}
 
-    def predict(self, theta_rows: np.ndarray) -> np.ndarray:
+    def predict(self, theta_rows: np.ndarray, *, near: np.ndarray | None = None) -> np.ndarray:
         """Outputs of every rollout for R parameter vectors in one batched model call.
 
         Parameters
         ----------
         theta_rows : array (R, 13) or (R, 9)
             Fit vectors ϑ = (θ, q) (:mod:`dsfd.estimation.params`).
+        near : array (13,) or (9,), optional
+            A fit vector close to every row whose rollouts an earlier single-row call
+            computed (a finite-difference Jacobian's base point): its cavity temperatures and
+            coupling slopes start every row's coupling. Only the number of fixed-point
+            evaluations depends on it, within the coupling tolerance.
 
         Returns
         -------
@@ -124,8 +136,19 @@ class WindowProblem:
         rows = np.repeat(theta_rows, s, axis=0)[:, None, :]
         inputs = with_offsets(inputs, rows[..., N_PARAMS:])
         theta = rows[..., :N_PARAMS]
+        if near is not None:
+            base = self.warm.get(full_vector(np.atleast_2d(near))[0].tobytes())
+        else:  # a single θ (a trial point of the fit): the latest one's rollouts
+            base = self.warm[next(reversed(self.warm))] if r == 1 and self.warm else None
         traj = self.model.rollout(tile(self.x_start), tile(self.regime), tile(self.or_),
-                                  inputs, theta, coupling_tol_k=COUPLING_TOL_K)
+                                  inputs, theta, coupling_tol_k=COUPLING_TOL_K,
+                                  t5_guess=None if base is None else tile(base[0]),
+                                  slope_guess=None if base is None else tile(base[1]))
+        if r == 1:
+            if len(self.warm) >= WARM_KEPT:
+                self.warm.pop(next(iter(self.warm)))
+            self.warm[theta_rows[0].tobytes()] = (traj.x[:, 1:, 4].copy(),
+                                                  np.array(traj.coupling_slope))
         out = np.empty((r * s, h, N_OUT))
         out[..., :5] = traj.readings()
         out[..., 5] = np.abs(traj.v_cav_ms)

@@ -34,6 +34,43 @@ from dsfd.physics.regimes import FlowSetup, flow_setup
 from dsfd.physics.rootfind import solve_fixed_point
 
 
+def _trajectory(xs: np.ndarray, cols: list) -> Trajectory:
+    """The rollout's states ``xs`` (B, H + 1, 6) and its steps' results as a Trajectory."""
+    nb = xs.shape[0]
+
+    def stack(get) -> np.ndarray:
+        return np.stack([get(r) for r in cols], axis=1)
+
+    return Trajectory(
+        x=xs,
+        x_mean=stack(lambda r: r.x_mean),
+        m_dot=stack(lambda r: r.flow.m_dot),
+        label=stack(lambda r: r.flow.label),
+        v_cav_ms=stack(lambda r: r.v_cav_ms),
+        q_cv_rd_w=stack(lambda r: r.q_cv_rd_w),
+        q_sol_w=stack(lambda r: r.q_sol_w),
+        q_air_w=stack(lambda r: r.q_air_w),
+        q_da_w=stack(lambda r: np.broadcast_to(r.q_da_w, (nb,))),
+        heat_in_wm2=stack(lambda r: r.heat_in_wm2),
+        evaluations=stack(lambda r: r.evaluations),
+        x5_probe=stack(lambda r: r.x5_probe_k),
+        coupling_slope=stack(lambda r: np.broadcast_to(r.coupling_slope, (nb,))),
+    )
+
+
+def _given_start(t5_k: np.ndarray, slope_guess: np.ndarray | None, k: int, x: np.ndarray,
+                 guess: np.ndarray | None, slope: np.ndarray | None
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Start of step k's coupling: a caller's cavity temperature ``t5_k`` and slope where
+    finite (:meth:`LumpedModel.rollout`), else the rollout's own warm start (x5 now and no
+    slope when it has none)."""
+    given = np.isfinite(t5_k)
+    own_guess = x[:, 4] if guess is None else guess
+    own_slope = np.full(x.shape[0], np.nan) if slope is None else slope
+    given_slope = slope_guess[:, k] if slope_guess is not None else np.nan
+    return np.where(given, t5_k, own_guess), np.where(given, given_slope, own_slope)
+
+
 class Trajectory(NamedTuple):
     """A batch of horizon rollouts: leading shape (B, H) unless noted.
 
@@ -56,6 +93,9 @@ class Trajectory(NamedTuple):
     evaluations : (B, H), int
     x5_probe : (B, H), [K]
         What the cavity-air probe reads at the end of each step (StepResult.x5_probe_k).
+    coupling_slope : (B, H), [-]
+        Last secant slope dh/dT5 of each step's coupling (StepResult.coupling_slope): with
+        ``x[:, 1:, 4]``, the warm start of a later rollout of nearly the same θ.
     """
 
     x: np.ndarray
@@ -70,6 +110,7 @@ class Trajectory(NamedTuple):
     heat_in_wm2: np.ndarray
     evaluations: np.ndarray
     x5_probe: np.ndarray
+    coupling_slope: np.ndarray | None = None
 
     def readings(self) -> np.ndarray:
         """What the x1..x5 sensors read at the end of each step (B, H, 5) [K]: the states,
@@ -207,7 +248,8 @@ class LumpedModel:
 
     def rollout(self, x0: np.ndarray, regime: np.ndarray, or_: np.ndarray,
                 inputs: StepInputs, theta: np.ndarray, *,
-                coupling_tol_k: float | None = None) -> Trajectory:
+                coupling_tol_k: float | None = None, t5_guess: np.ndarray | None = None,
+                slope_guess: np.ndarray | None = None) -> Trajectory:
         """Roll a batch of control sequences out over a horizon.
 
         Parameters
@@ -222,6 +264,11 @@ class LumpedModel:
         coupling_tol_k : float, optional, [K]
             Override of the coupling fixed-point tolerance (a screening pass of the
             optimiser can afford a looser one).
+        t5_guess, slope_guess : arrays (B, H), optional, [K] and [-]
+            Where finite, the start of each step's coupling and its slope dh/dT5 instead of
+            the rollout's own warm start: the end-of-step x5 and ``coupling_slope`` of an
+            earlier rollout of nearly the same θ (a finite-difference Jacobian's base point
+            starts the perturbed rows within a few millikelvin of their roots).
 
         Returns
         -------
@@ -244,6 +291,8 @@ class LumpedModel:
         last_slope = np.full(nb, np.nan)
         ahead, predicted = np.zeros(nb), np.zeros(nb, bool)
         for k in range(horizon):
+            if t5_guess is not None:
+                guess, slope = _given_start(t5_guess[:, k], slope_guess, k, x, guess, slope)
             res = coupled_step(nc, x, inp.at((slice(None), k)), theta[:, k],
                                setup.at((slice(None), k)), guess, slope)
             cols.append(res)
@@ -267,23 +316,7 @@ class LumpedModel:
             x = res.x_next
             xs[:, k + 1] = x
 
-        def stack(get) -> np.ndarray:
-            return np.stack([get(r) for r in cols], axis=1)
-
-        return Trajectory(
-            x=xs,
-            x_mean=stack(lambda r: r.x_mean),
-            m_dot=stack(lambda r: r.flow.m_dot),
-            label=stack(lambda r: r.flow.label),
-            v_cav_ms=stack(lambda r: r.v_cav_ms),
-            q_cv_rd_w=stack(lambda r: r.q_cv_rd_w),
-            q_sol_w=stack(lambda r: r.q_sol_w),
-            q_air_w=stack(lambda r: r.q_air_w),
-            q_da_w=stack(lambda r: np.broadcast_to(r.q_da_w, (nb,))),
-            heat_in_wm2=stack(lambda r: r.heat_in_wm2),
-            evaluations=stack(lambda r: r.evaluations),
-            x5_probe=stack(lambda r: r.x5_probe_k),
-        )
+        return _trajectory(xs, cols)
 
     def steady_state(self, regime: np.ndarray, or_: np.ndarray, inputs: StepInputs,
                      theta: np.ndarray, *, iterations: int = 50, tol_k: float = 1e-5,
