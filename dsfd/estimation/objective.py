@@ -144,11 +144,12 @@ class WindowProblem:
                                   inputs, theta, coupling_tol_k=COUPLING_TOL_K,
                                   t5_guess=None if base is None else tile(base[0]),
                                   slope_guess=None if base is None else tile(base[1]))
-        if r == 1:
+        if r == 1:  # kept newest last (a θ rolled out again moves to the end)
+            key = theta_rows[0].tobytes()
+            self.warm.pop(key, None)
             if len(self.warm) >= WARM_KEPT:
                 self.warm.pop(next(iter(self.warm)))
-            self.warm[theta_rows[0].tobytes()] = (traj.x[:, 1:, 4].copy(),
-                                                  np.array(traj.coupling_slope))
+            self.warm[key] = (traj.x[:, 1:, 4].copy(), np.array(traj.coupling_slope))
         out = np.empty((r * s, h, N_OUT))
         out[..., :5] = traj.readings()
         out[..., 5] = np.abs(traj.v_cav_ms)

@@ -58,7 +58,7 @@ def _trajectory(xs: np.ndarray, cols: list) -> Trajectory:
     )
 
 
-def _given_start(t5_k: np.ndarray, slope_guess: np.ndarray | None, k: int, x: np.ndarray,
+def _given_start(t5_k: np.ndarray, slope_k: np.ndarray | None, x: np.ndarray,
                  guess: np.ndarray | None, slope: np.ndarray | None
                  ) -> tuple[np.ndarray, np.ndarray]:
     """Start of step k's coupling: a caller's cavity temperature ``t5_k`` and slope where
@@ -67,7 +67,7 @@ def _given_start(t5_k: np.ndarray, slope_guess: np.ndarray | None, k: int, x: np
     given = np.isfinite(t5_k)
     own_guess = x[:, 4] if guess is None else guess
     own_slope = np.full(x.shape[0], np.nan) if slope is None else slope
-    given_slope = slope_guess[:, k] if slope_guess is not None else np.nan
+    given_slope = np.nan if slope_k is None else slope_k
     return np.where(given, t5_k, own_guess), np.where(given, given_slope, own_slope)
 
 
@@ -292,7 +292,9 @@ class LumpedModel:
         ahead, predicted = np.zeros(nb), np.zeros(nb, bool)
         for k in range(horizon):
             if t5_guess is not None:
-                guess, slope = _given_start(t5_guess[:, k], slope_guess, k, x, guess, slope)
+                guess, slope = _given_start(
+                    t5_guess[:, k], None if slope_guess is None else slope_guess[:, k], x,
+                    guess, slope)
             res = coupled_step(nc, x, inp.at((slice(None), k)), theta[:, k],
                                setup.at((slice(None), k)), guess, slope)
             cols.append(res)
