@@ -7,7 +7,8 @@ several seeds can be built over several sessions and re-scored whenever ``mpc`` 
 
 An entry is used only when everything that determines the oracle's run is the same:
 the case, the seed, the scored days and warm-up, the weather record, the panel
-configuration (a SHA-256 digest of its canonical form) and :data:`ORACLE_VERSION`. Change
+configuration (a SHA-256 digest of its canonical form, without the sections the plant oracle
+never reads: :data:`NOT_READ_BY_ORACLE`) and :data:`ORACLE_VERSION`. Change
 :data:`ORACLE_VERSION` with any change of the truth plant, the plant oracle or the closed
 loop's set-up: the file cannot see code. Each entry also records the commit that produced it
 (``git rev-parse HEAD`` where the bench runs in a checkout) and when.
@@ -25,16 +26,26 @@ from pathlib import Path
 
 from dsfd.config.panel import PanelConfig
 
-__all__ = ["ORACLE_VERSION", "OracleCache", "config_digest"]
+__all__ = ["NOT_READ_BY_ORACLE", "ORACLE_VERSION", "OracleCache", "config_digest"]
 
 #: Version of what the plant oracle's result depends on in code (the truth plant, the plant
 #: oracle, the closed-loop set-up). Entries of another version are ignored.
 ORACLE_VERSION = "2026-11-27 consistent simulation (issue 35)"
 
 
+#: Sections of the panel configuration left out of the digest. The plant oracle plans with
+#: the plant's true parameters on a frozen calibration stage that never fits nor tracks
+#: offsets (:class:`dsfd.sim.oracle_controllers.FrozenCalibration`), so ``calibration`` does
+#: not reach its commands; nor do the integrations. A calibration setting tried on ``mpc``
+#: thus keeps the oracle figures already computed.
+NOT_READ_BY_ORACLE = ("calibration", "mqtt", "bacnet")
+
+
 def config_digest(cfg: PanelConfig) -> str:
-    """SHA-256 of the panel configuration's canonical JSON form (first 16 hex digits)."""
-    text = json.dumps(dataclasses.asdict(cfg), sort_keys=True, default=str)
+    """SHA-256 of the panel configuration's canonical JSON form without
+    :data:`NOT_READ_BY_ORACLE` (first 16 hex digits)."""
+    doc = {k: v for k, v in dataclasses.asdict(cfg).items() if k not in NOT_READ_BY_ORACLE}
+    text = json.dumps(doc, sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 

@@ -11,7 +11,7 @@ import sys
 import pytest
 
 from dsfd.bench.closed_loop import bench_closed_loop
-from dsfd.bench.oracle_cache import ORACLE_VERSION, OracleCache
+from dsfd.bench.oracle_cache import ORACLE_VERSION, OracleCache, config_digest
 from dsfd.sim.replay import load_weather
 from tests.conftest import PANELS
 
@@ -88,3 +88,22 @@ def test_a_file_that_is_no_oracle_cache_is_refused_naming_it(tmp_path):
     assert proc.returncode == 2
     assert f"{bad}: not a plant-oracle cache" in proc.stderr
     assert bad.read_text() == '{"target": "closed-loop"}'  # nothing written over it
+
+
+@pytest.mark.slow
+def test_a_calibration_setting_keeps_the_cached_oracle_because_the_oracle_never_reads_it(
+        suwon, tmp_path):
+    """The digest leaves out ``calibration`` (NOT_READ_BY_ORACLE); checked by running the
+    plant oracle under two calibration settings: same commands, same J."""
+    rmis_raw = load_weather("rmis-golden-2022-01")
+    tuned = dataclasses.replace(suwon, calibration=dataclasses.replace(
+        suwon.calibration, identifiability_sd_ratio=0.5, measurement_gain=0.3))
+    assert config_digest(tuned) == config_digest(suwon)
+    runs = [bench_closed_loop(cfg, rmis_raw, seed=2, controllers=("plant-oracle",), **TINY)
+            for cfg in (suwon, tuned)]
+    key = "clear-heating.plant-oracle.J_kwh"
+    assert runs[0][key] == runs[1][key]
+    # what the oracle does read changes the digest
+    penalised = dataclasses.replace(suwon, control=dataclasses.replace(
+        suwon.control, louver_move_penalty_wh=0.5))
+    assert config_digest(penalised) != config_digest(suwon)
