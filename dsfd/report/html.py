@@ -121,6 +121,29 @@ def _errors(report: Report) -> str:
     return _table(head, rows, left=2)
 
 
+def _errors_by_regime(report: Report) -> str:
+    rows_in = report.kpis.errors_by_regime
+    if not rows_in:
+        return "<p>No scored cycle.</p>"
+    keys = [k for k in (*STATES, "v") if any(k in r["outputs"] for r in rows_in)]
+    head = ["regime", "cycles", *(("|v| [cm/s]" if k == "v" else f"{k} [K]") for k in keys)]
+    rows = []
+    for r in rows_in:
+        outs = r["outputs"]
+        cycles = max(o["cycles"] for o in outs.values())
+        cells = []
+        for k in keys:
+            o = outs.get(k)
+            scale = 100.0 if k == "v" else 1.0
+            bias = o["model_mean_error"] * scale if o is not None else math.nan
+            cells.append("–" if o is None else
+                         f"{_f(o['model_mae'] * scale, 3)} / {_f(o['persistence_mae'] * scale, 3)}"
+                         + (f" ({bias:+.2f})" if math.isfinite(bias) else ""))
+        label = r["regime"] if isinstance(r["regime"], str) else f"{r['regime']} {r['name']}"
+        rows.append([label, str(cycles), *cells])
+    return _table(head, rows, left=1)
+
+
 def _flagged(report: Report) -> str:
     flagged = report.kpis.flagged
     if not flagged:
@@ -218,6 +241,13 @@ the last good reading; both on the same cycles. {k.horizon_steps} steps: the hor
 prediction with the applied command held on the forecast weather, against the reading then.
 </p>
 {_errors(report)}
+<h4>One step ahead by airflow regime</h4>
+<p class="meta">Each cell: model / persistence mean absolute error, and in brackets the
+model's mean error (prediction − reading; + the model runs warm or fast). A step counts for the
+regime applied over it when the step before had the same; the steps right after a regime
+change are a row of their own. A model that loses to persistence in one regime points to what
+its lumped form misses there.</p>
+{_errors_by_regime(report)}
 <h3>Flagged samples by signal and quality</h3>{_flagged(report)}
 <h3>Calibration</h3>{_bounds(report)}
 {diagnostics}

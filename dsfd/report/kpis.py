@@ -26,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from dsfd.report.regime_errors import errors_by_regime
 from dsfd.storage.history import History
 from dsfd.storage.schema import HEAT_TERMS as HEAT_TERM_KEYS
 
@@ -112,6 +113,8 @@ class PredictionErrors:
     horizon_model: dict[str, np.ndarray]
     horizon_persistence: dict[str, np.ndarray]
     horizon_steps: int
+    #: The one-step errors with their sign, prediction − reading (the model's bias).
+    model_signed: dict[str, np.ndarray] = field(default_factory=dict)
 
 
 def prediction_errors(history: History, step_s: float) -> PredictionErrors:
@@ -119,6 +122,7 @@ def prediction_errors(history: History, step_s: float) -> PredictionErrors:
     n = len(history)
     one = _one_step(history, step_s)
     model: dict[str, np.ndarray] = {}
+    signed: dict[str, np.ndarray] = {}
     persist: dict[str, np.ndarray] = {}
     outputs = [(s, f"{s}_c", f"pred_{s}_c") for s in STATES] + [("v", "v_cav_ms",
                                                                  "pred_v_cav_ms")]
@@ -130,7 +134,8 @@ def prediction_errors(history: History, step_s: float) -> PredictionErrors:
         prev_held = np.full(n, np.nan)
         prev_held[1:] = _held(y)[:-1]
         scored = one & np.isfinite(y) & np.isfinite(pred) & np.isfinite(prev_held)
-        model[key] = np.where(scored, np.abs(pred - y), np.nan)
+        signed[key] = np.where(scored, pred - y, np.nan)
+        model[key] = np.abs(signed[key])
         persist[key] = np.where(scored, np.abs(prev_held - y), np.nan)
     horizon = history.model["horizon_s"]
     h_s = float(np.nanmedian(horizon)) if np.isfinite(horizon).any() else math.nan
@@ -155,7 +160,7 @@ def prediction_errors(history: History, step_s: float) -> PredictionErrors:
         scored = np.isfinite(y_t) & np.isfinite(hz) & np.isfinite(held)
         hz_model[key] = np.where(scored, np.abs(hz - y_t), np.nan)
         hz_persist[key] = np.where(scored, np.abs(held - y_t), np.nan)
-    return PredictionErrors(model, persist, hz_model, hz_persist, h_steps)
+    return PredictionErrors(model, persist, hz_model, hz_persist, h_steps, signed)
 
 
 @dataclass
@@ -190,6 +195,8 @@ class Kpis:
     horizon_steps: int
     step_s: float
     utc_offset_h: float
+    #: One-step errors per airflow regime (:func:`dsfd.report.regime_errors.errors_by_regime`).
+    errors_by_regime: list[dict[str, Any]] = field(default_factory=list)
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready figures (``dsfd report --json``)."""
@@ -202,6 +209,7 @@ class Kpis:
                 "flagged": [{"signal": s, "quality": q, "samples": n}
                             for (s, q), n in sorted(self.flagged.items())],
                 "parameters_at_bound": self.at_bound, "prediction_errors": self.errors,
+                "prediction_errors_by_regime": self.errors_by_regime,
                 "horizon_steps": self.horizon_steps, "step_s": self.step_s,
                 "utc_offset_h": self.utc_offset_h}
 
@@ -351,4 +359,4 @@ def compute_kpis(history: History, config: Mapping[str, Any] | None,
     return Kpis(days=days, total=total, flagged=dict(flagged),
                 at_bound=_at_bound(history, config, float(t[-1])),
                 errors=_summary_errors(err), horizon_steps=err.horizon_steps, step_s=step_s,
-                utc_offset_h=float(offset))
+                utc_offset_h=float(offset), errors_by_regime=errors_by_regime(history, err))

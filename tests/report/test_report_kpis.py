@@ -127,3 +127,37 @@ def test_time_at_a_bound_ends_with_the_run_not_at_the_next_start():
     at = compute_kpis(h, config).at_bound
     assert [(a["parameter"], a["bound"]) for a in at] == [("h_out", "lower")]
     assert math.isclose(at[0]["hours"], (1200 + 900) / 3600)  # not the 2 h between runs
+
+
+def test_one_step_errors_by_regime_partition_the_scored_cycles(faulted_run):
+    """Each scored cycle counted once: under the regime applied over its step when the step
+    before had the same, else in the "after a change" row; figures recomputed here from the
+    rows of the database with plain loops."""
+    db = faulted_run.state_dir / "timeseries.sqlite"
+    afr = dict(query(db, "SELECT cycle, applied_afr FROM model"))
+    pred = dict(query(db, "SELECT cycle, pred_x2_c FROM model WHERE pred_x2_c IS NOT NULL"))
+    y = dict(query(db, "SELECT cycle, value FROM samples WHERE signal = 'x2_c' "
+                       "AND quality = 'good'"))
+    rows: dict[object, list[tuple[float, float, float]]] = {}
+    for c in sorted(pred):
+        if c not in y or c - 1 not in y:
+            continue
+        over = afr[c - 1]
+        key = over if afr.get(c - 2, over) == over else "after a change"
+        rows.setdefault(key, []).append((abs(pred[c] - y[c]), abs(y[c - 1] - y[c]),
+                                         pred[c] - y[c]))
+    by_regime = faulted_run.doc["prediction_errors_by_regime"]
+    got = {r["regime"]: r["outputs"]["x2"] for r in by_regime if "x2" in r["outputs"]}
+    assert set(got) == set(rows)
+    for key, errs in rows.items():
+        n = len(errs)
+        assert got[key]["cycles"] == n
+        assert math.isclose(got[key]["model_mae"], sum(e[0] for e in errs) / n, rel_tol=1e-9)
+        assert math.isclose(got[key]["persistence_mae"], sum(e[1] for e in errs) / n,
+                            rel_tol=1e-9)
+        assert math.isclose(got[key]["model_mean_error"], sum(e[2] for e in errs) / n,
+                            rel_tol=1e-9, abs_tol=1e-12)
+    # the rows partition the cycles of the whole-run table
+    total = faulted_run.doc["prediction_errors"]["x2"]["h1_cycles"]
+    assert sum(len(e) for e in rows.values()) == total
+    assert "One step ahead by airflow regime" in faulted_run.html.read_text()
