@@ -91,7 +91,7 @@ def test_resumed_state_continues_the_calibration(suwon):
 def test_offsets_follow_a_sensor_bias(suwon):
     """With every excited parameter free (identifiability_sd_ratio 1, the paper's fit) the
     exterior pane's 1.5 K bias goes into its offset q_x1. On this 3-h window h_out and q_x1
-    are not determined apart, so the default ratio 0.5 holds both at their prior
+    are not determined apart, so a ratio of 0.5 holds both at their prior
     (docs/model.md#identifiability); what this test checks is the offset itself."""
     suwon = with_calibration(suwon, identifiability_sd_ratio=1.0)
     model, steps, track, _ = _setup(suwon, step_s=120.0, hours=3.0, seed=4, noise_k=0.05)
