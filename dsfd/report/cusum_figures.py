@@ -14,8 +14,8 @@ from matplotlib.figure import Figure
 from dsfd.estimation.diagnostics import (
     ResidualBlocks,
     ResidualSettings,
+    block_cusum,
     judged_blocks,
-    page_cusum,
 )
 from dsfd.report.plotting import OUTSIDE, WIDTH_IN
 
@@ -66,7 +66,7 @@ def block_figure(row: Mapping[str, Any], ax_t: TimeAxes, times: np.ndarray,
     ax_t.marks(top, row, legend=True)
     top.legend(**OUTSIDE)
     ax_t.setup(top, label=False)
-    cs = page_cusum(b.z, k=b.k, h=st.h_sd)
+    cs = block_cusum(b, st)
     n = cs.statistic.size
     gap_mid, (stat,) = broken(b.blocks[:n], mid[:n], cs.statistic)
     bottom.plot(ax_t.local(gap_mid), stat, color=colour, lw=1.3,

@@ -11,6 +11,8 @@ the inner pane's conductance to the room and the unit's gap.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -162,3 +164,28 @@ def test_nights_whose_level_wanders_widely_raise_the_allowance_not_a_finding(see
     q = q + np.where(t >= onset, 15.0, 0.0)
     f = night_offset_change(t, q, night, name="q_x3")
     assert f is not None and onset < f.detected_s <= onset + 8 * 3600.0
+
+
+@pytest.mark.parametrize(("seed", "step_wm2"), [(0, 2.5), (1, 3.0), (3, 3.0)])
+def test_a_held_departure_below_the_smallest_change_is_no_finding(seed, step_wm2):
+    """A night level that moves by 2.5-3 W/m² and stays there (about 0.2 K on the inner
+    pane) exceeds the 2 W/m² allowance: on these histories the CUSUM alone crosses its
+    threshold within 30 h, on a mean departure of 3.3-3.6 W/m². That is below the smallest
+    change worth a finding (4 W/m²), so with ``alarm_min_shift`` it is never one (the real
+    Aalborg week's q_x3 under the identifiability test, docs/model.md#diagnostics-night-offsets)."""
+    onset = T0 + 7 * DAY + 12.5 * 3600.0
+    t, q, night = _history(seed)
+    q = q + np.where(t >= onset, step_wm2, 0.0)
+    statistic_alone = dataclasses.replace(NIGHT_OFFSET_SETTINGS, alarm_min_shift=False)
+    f = night_offset_change(t, q, night, name="q_x3", settings=statistic_alone)
+    assert f is not None and f.evidence[0].shift < NIGHT_OFFSET_SETTINGS.min_shift == 4.0
+    assert night_offset_change(t, q, night, name="q_x3") is None
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_held_departure_above_the_smallest_change_is_found_in_its_first_night(seed):
+    onset = T0 + 7 * DAY + 12.5 * 3600.0
+    t, q, night = _history(seed)
+    f = night_offset_change(t, q + np.where(t >= onset, 6.0, 0.0), night, name="q_x3")
+    assert f is not None and onset < f.detected_s <= onset + 6 * 3600.0
+    assert f.evidence[0].shift >= NIGHT_OFFSET_SETTINGS.min_shift
