@@ -73,7 +73,10 @@ class Calibration:
     update_interval_s: float = setting(
         600.0, doc="Time between on-line updates", unit="s", ge=0, le=86400)
     min_window_h: float = setting(
-        1.0, doc="Data needed before the first on-line update", unit="h", gt=0, le=48)
+        0.25, doc="Data needed before the first on-line update: 15 min let the anemometer "
+        "correct the default flow parameters within the first quarter hour (the "
+        "identifiability test keeps what so short a window cannot determine at its prior; "
+        "docs/model.md#slat-film has the README dry run with 1 h)", unit="h", gt=0, le=48)
     max_nfev: int = setting(
         8, doc="Residual evaluations (least-squares iterations) per on-line update", ge=1,
         le=500)

@@ -23,9 +23,10 @@ from dsfd.config.parameters import Param
 from dsfd.physics.airflow import IB, IT, AirflowGeometry, FlowState
 from dsfd.physics.cavity_profile import outlet_excess_ratio, probe_excess_ratio
 from dsfd.physics.constants import SIGMA
-from dsfd.physics.network import X5, Boundary, assemble, boundary_heat_in
+from dsfd.physics.network import X4, X5, Boundary, assemble, boundary_heat_in
 from dsfd.physics.regimes import FlowSetup, PathFlow, inflow, opening_flows, path_flows
 from dsfd.physics.rootfind import solve_fixed_point
+from dsfd.physics.slat_film import film_factor
 from dsfd.physics.zoh import Modal, modal, modal_state, modal_step, zoh_vanloan
 
 #: Conductance tying the louver node to the cavity air when a panel has no louver
@@ -160,6 +161,10 @@ class NetworkConstants:
     cavity_profile: str  # "well_mixed" (paper) or "exponential" (ISO 15099 ventilated gap)
     #: Height of the x5 probe from the inlet over the cavity height (None: it reads x5).
     probe_height_frac: float | None = None
+    #: Speeds of the slat film's factor (docs/model.md#slat-film) [m/s]: where its natural
+    #: and forced parts are equal (0: h_ca2 constant, the paper's model) and where it is 1.
+    slat_film_equal_ms: float = 0.0
+    slat_film_reference_ms: float = 0.1
 
 
 _SECANT_A = np.array([1, 0, 0, 3, 0, 2])  # first node of each radiative pair
@@ -258,7 +263,18 @@ def with_flow(nc: NetworkConstants, t5: np.ndarray, setup: FlowSetup, lap0: np.n
     pf = path_flows(setup, t5, nc.geom, active=active)
     m_in, t_inflow = inflow(setup, pf)
     g_flow = nc.cp_air * m_in / nc.geom.facade_area_m2
-    k, p = profile_ratios(nc, lap0, g_flow)
+    lap = lap0.copy()
+    if nc.slat_film_equal_ms > 0.0 and nc.has_louver:
+        # the louver–air link a_L h_ca2 scaled by the slat film's factor at this flow
+        speed = m_in / (pf.rho_c * nc.geom.cavity_area_m2)
+        extra = lap0[:, X4, X5] * (film_factor(speed, equal_speed_ms=nc.slat_film_equal_ms,
+                                               reference_speed_ms=nc.slat_film_reference_ms)
+                                   - 1.0)
+        lap[:, X4, X5] += extra
+        lap[:, X5, X4] += extra
+        lap[:, X4, X4] -= extra
+        lap[:, X5, X5] -= extra
+    k, p = profile_ratios(nc, lap, g_flow)
     # The probe's single-column profile holds where the air crosses the cavity, inlet on one
     # skin and outlet on the other (5–8); where it runs along one side of the louver (1–4)
     # or through all four dampers (9) the probe reads both sub-cavities and p = 1 (measured:
@@ -266,7 +282,6 @@ def with_flow(nc: NetworkConstants, t5: np.ndarray, setup: FlowSetup, lap0: np.n
     if nc.probe_height_frac is not None:
         p = np.where(np.isin(setup.regime, THROUGH_CAVITY_REGIMES), p, 1.0)
     g_adv = k * g_flow
-    lap = lap0.copy()
     q = q0.copy()
     lap[:, X5, X5] -= g_adv
     q[:, X5] += g_adv * t_inflow

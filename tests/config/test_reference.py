@@ -259,8 +259,14 @@ def test_explain_prints_one_entry_with_unit_default_and_limits():
     assert done.returncode == 0, done.stderr
     lines = done.stdout.splitlines()
     assert lines[0] == "calibration.min_window_h"
-    fields = {ln.split(":", 1)[0].strip(): ln.split(":", 1)[1].strip() for ln in lines[1:]}
-    assert fields["unit"] == "h" and fields["default"] == "1.0"
+    fields: dict[str, str] = {}
+    for ln in lines[1:]:  # "  key:     value", then the value's wrapped lines
+        key, sep, value = ln.partition(":")
+        if sep and key.startswith("  ") and not key.startswith("   "):
+            fields[key.strip()] = value.strip()
+        else:
+            fields["what"] += " " + ln.strip()
+    assert fields["unit"] == "h" and fields["default"] == "0.25"
     assert fields["limits"] == "> 0, ≤ 48" and "first on-line update" in fields["what"]
     # the loader agrees: 48 h is allowed by the limit, 48.1 h is not
     assert not [i for i in _issues(_with("calibration.min_window_h", 48.0)[0])

@@ -60,11 +60,12 @@ def test_updates_are_due_after_the_minimum_window_and_interval(suwon):
     model = LumpedModel(suwon)
     cal = OnlineCalibrator(model)
     t0 = 1.6409e9
-    assert not cal.due(t0 + 1800.0, t0)          # min_window_h = 1
-    assert cal.due(t0 + 3600.0, t0)
-    cal.state = dataclasses.replace(cal.state, last_update_s=t0 + 3600.0)
-    assert not cal.due(t0 + 3900.0, t0)          # update_interval_s = 600
-    assert cal.due(t0 + 4200.0, t0)
+    assert cal.settings.min_window_h == 0.25
+    assert not cal.due(t0 + 840.0, t0)           # min_window_h = 0.25: 15 min of data
+    assert cal.due(t0 + 900.0, t0)
+    cal.state = dataclasses.replace(cal.state, last_update_s=t0 + 900.0)
+    assert not cal.due(t0 + 1200.0, t0)          # update_interval_s = 600
+    assert cal.due(t0 + 1500.0, t0)
     time_s = t0 + 60.0 * np.arange(600)
     assert time_s[window_start(time_s, 599, 4.0)] == time_s[599] - 4 * 3600.0
 

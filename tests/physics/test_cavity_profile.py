@@ -17,6 +17,7 @@ from dsfd.physics.cavity_profile import outlet_excess_ratio, probe_excess_ratio
 from dsfd.physics.constants import T_ZERO
 from dsfd.physics.forcing import FacadeOptics, step_inputs
 from dsfd.physics.model import LumpedModel
+from dsfd.physics.slat_film import film_factor
 from tests.physics.test_louver_flow_loss import _night
 
 
@@ -73,23 +74,30 @@ def test_step_conserves_energy_with_either_profile(suwon, regime):
         assert du == pytest.approx(float(res.heat_in_wm2[0]), rel=1e-6, abs=1e-6)
 
 
+def _surface_over_flow(model: LumpedModel, res, m_in: float) -> float:
+    """a = (h_ca1 + a_L h_ca2 F(v) + h_ca3)/(c_p ṁ/A_f) of a step from the default θ, F the
+    slat film's factor at the step's cavity speed (docs/model.md#slat-film)."""
+    theta, nc = model.default_theta(), model.nc
+    film = film_factor(res.v_cav_ms, equal_speed_ms=nc.slat_film_equal_ms,
+                       reference_speed_ms=nc.slat_film_reference_ms)[0]
+    assert nc.slat_film_equal_ms > 0 and film != pytest.approx(1.0)
+    return float((theta[Param.H_CA1] + nc.slat_area_ratio * theta[Param.H_CA2] * film
+                  + theta[Param.H_CA3]) / (nc.cp_air * m_in / nc.geom.facade_area_m2))
+
+
 def test_room_gets_the_heat_the_flow_takes_from_the_cavity(suwon):
     # Regime 1 exhausts cavity air into the room and draws room air in. Q_air is c_p ṁ times
     # the outlet's excess over the room: x̄5 − T_i when well mixed, k(a) times that with the
-    # profile, a = (h_ca1 + a_L h_ca2 + h_ca3)/(c_p ṁ/A_f) from the defaults.
+    # profile, a = (h_ca1 + a_L h_ca2 F(v) + h_ca3)/(c_p ṁ/A_f) (_surface_over_flow).
     q = {}
     for name, (model, inp, _, res) in _one_step(suwon, 1).items():
         m_in = float(np.clip(res.flow.m_dot, 0, None).sum())
         assert m_in > 0
-        theta = model.default_theta()
-        nc = model.nc
-        g_flow = nc.cp_air * m_in / nc.geom.facade_area_m2
-        a = (theta[Param.H_CA1] + nc.slat_area_ratio * theta[Param.H_CA2]
-             + theta[Param.H_CA3]) / g_flow
+        a = _surface_over_flow(model, res, m_in)
         k = 1.0 if name == "well_mixed" else float(outlet_excess_ratio(a))
         excess = float(res.x_mean[0, 4] - inp.t_in_k)
         q[name] = float(res.q_air_w[0])
-        assert q[name] == pytest.approx(nc.cp_air * m_in * k * excess, rel=1e-9)
+        assert q[name] == pytest.approx(model.nc.cp_air * m_in * k * excess, rel=1e-9)
         assert 1.0 < float(outlet_excess_ratio(a)) < 2.0
     # a hotter outlet for the same kind of step: the room gets more of the cavity's heat
     assert q["exponential"] > q["well_mixed"] > 0
@@ -117,7 +125,8 @@ def test_the_mid_height_probe_limits():
 
 def test_the_model_reads_its_probe_where_the_air_crosses_the_cavity(suwon):
     """x5_probe_k = T_in + p(a)(x5 − T_in) in a through-cavity regime (7: outdoor air in at
-    the exterior bottom, out at the interior top), with a and T_in from the step's own flow;
+    the exterior bottom, out at the interior top, or the reverse where the stack wins), with
+    a and T_in from the step's own flow;
     the reading is x5 itself where the air runs along one side (1) or without flow (10)."""
     mid = dataclasses.replace(suwon, model=dataclasses.replace(
         suwon.model, cavity_air_probe="mid_height"))
@@ -129,10 +138,9 @@ def test_the_model_reads_its_probe_where_the_air_crosses_the_cavity(suwon):
             continue
         m_in = float(np.clip(res.flow.m_dot, 0, None).sum())
         assert m_in > 0
-        theta, nc = model.default_theta(), model.nc
-        a = ((theta[Param.H_CA1] + nc.slat_area_ratio * theta[Param.H_CA2]
-              + theta[Param.H_CA3]) / (nc.cp_air * m_in / nc.geom.facade_area_m2))
-        t_in = float(inp.t_out_k)  # supply air comes from outdoors
+        a = _surface_over_flow(model, res, m_in)
+        # supply air comes from outdoors; reversed by the stack, the room's air comes in
+        t_in = float(inp.t_out_k if res.flow.m_dot[0, 0] > 0 else inp.t_in_k)
         assert probe == pytest.approx(t_in + float(probe_excess_ratio(a)) * (x5 - t_in),
                                       rel=1e-9)
         assert abs(probe - x5) > 0.05  # the correction is there, not a rounding

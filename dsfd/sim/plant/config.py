@@ -62,6 +62,12 @@ class PlantOptions:
     convection: Literal["constant", "correlations"] = setting(
         "correlations", doc="docs/model.md#plant-switches: the six constant h's (lumped) or local "
         "correlations (Churchill–Chu/parallel plates, DOE-2 exterior, ISO 15099 room side)")
+    slat_film_reference_speed_ms: float = setting(
+        0.0, doc="docs/model.md#slat-film: with convection='constant', the slats' h_ca2 is "
+        "the film at this cavity speed and scales with the speed as the lumped model's "
+        "model.slat_film: speed_dependent (lumped: the panel's "
+        "model.slat_film_reference_speed_ms); 0: constant, the paper's model",
+        unit="m/s", ge=0, le=5)
     dgu_gap: Literal["constant_h", "iso15099"] = setting(
         "iso15099", doc="docs/model.md#plant-switches: h_ca4 constant (lumped) or the ISO 15099 "
         "closed-cavity Nu with the local pane temperature difference")
@@ -144,8 +150,9 @@ class PlantOptions:
         setting (N = 1), others as given.
 
         ``model``: the panel's model options, whose ``diagonal_flow`` and ``louver_flow_loss``
-        the flow switches follow (default: the model's defaults, the paper's power law for
-        regimes 5–8 with the louver's loss).
+        the flow switches follow and whose ``slat_film`` the slats' constant film does
+        (default: the model's defaults, the paper's power law for regimes 5–8 with the
+        louver's loss, the speed-dependent slat film).
 
         One air node is well mixed, so this plant is the lumped model with
         ``model.cavity_air_profile: well_mixed``; with more segments the column stratifies
@@ -155,6 +162,8 @@ class PlantOptions:
         lumped = dict(
             n_segments=1, split_cavity=False, plenums=False, damper_model="orifice",
             louver_flow_resistance=model.louver_flow_loss, diagonal_flow=model.diagonal_flow,
+            slat_film_reference_speed_ms=(model.slat_film_reference_speed_ms
+                                          if model.slat_film == "speed_dependent" else 0.0),
             convection="constant", dgu_gap="constant_h", radiation="three_layer",
             optics="lumped", solar_time="step",
             weather_hold="zoh", air_properties="constant", actuators="ideal",

@@ -31,6 +31,7 @@ from dsfd.config.parameters import CONVECTIVE_NAMES, Param
 from dsfd.physics.airflow import louver_flow_loss
 from dsfd.physics.constants import GRAVITY, R_AIR, SIGMA
 from dsfd.physics.forcing import TERRAIN_PROFILE
+from dsfd.physics.slat_film import equal_speed_ms, film_factor
 from dsfd.sim.plant.actuators import Actuators
 from dsfd.sim.plant.advection import Advection2
 from dsfd.sim.plant.config import PlantOptions, TrueParameters
@@ -130,6 +131,10 @@ class PlantModel:
         self.a_l = 2.0 * lv.slat_width_m / lv.slat_pitch_m if lv else 0.0
         self.gap = geo.depth / 2 if has_louver else geo.depth
         self.h_default = np.array(cfg.parameters.values("default", CONVECTIVE_NAMES))
+        #: v_e of the slat film's factor (0: h_ca2 constant; docs/model.md#slat-film).
+        self.slat_equal_ms = (equal_speed_ms(slat_width_m=lv.slat_width_m,
+                                             height_m=cfg.facade.glazed_height_m)
+                              if lv and options.slat_film_reference_speed_ms > 0 else 0.0)
         # Local wind of each segment relative to the façade centre (power law,
         # docs/model.md#plant-heat-transfer).
         a_site, _ = TERRAIN_PROFILE[cfg.site.terrain]
@@ -340,12 +345,16 @@ class PlantModel:
         t1, t2, t3, t4 = T[sl["g1"]], T[sl["g2"]], T[sl["g3"]], T[sl["lv"]]
         to, ti = T[sl["ao"]], T[sl["ai"]]
         hs = ctx.h_scale
+        speed = abs(m_cav) / (fl["rho_mean"] * self.openings.cavity_area_m2)
         if opt.convection == "constant":
             h = hs * self.h_default
             h1, h2o, h2i, h3 = h[Param.H_CA1], h[Param.H_CA2], h[Param.H_CA2], h[Param.H_CA3]
+            if self.slat_equal_ms > 0.0:
+                h2o = h2i = h2o * float(film_factor(
+                    speed, equal_speed_ms=self.slat_equal_ms,
+                    reference_speed_ms=opt.slat_film_reference_speed_ms))
             h_out, h_in = h[Param.H_OUT], h[Param.H_IN]
         else:
-            speed = abs(m_cav) / (fl["rho_mean"] * self.openings.cavity_area_m2)
             c = coefficients(self.conv_geo, t1, t2, t3, t4, to, ti, speed=speed,
                              upward=m_cav >= 0, p=p, t_out=t_out, t_in=t_in,
                              wind=wind * self.wind_profile, windward=ctx.windward,
