@@ -32,7 +32,7 @@ from dsfd.physics.coupling import (
 )
 from dsfd.physics.regimes import FlowSetup, flow_setup
 from dsfd.physics.rootfind import solve_fixed_point
-from dsfd.physics.slat_film import equal_speed_ms
+from dsfd.physics.slat_film import panel_equal_speed_ms
 
 
 def _trajectory(xs: np.ndarray, cols: list) -> Trajectory:
@@ -165,9 +165,8 @@ def network_constants(cfg: PanelConfig) -> NetworkConstants:
         q_air_basis=mo.q_air_basis,
         cavity_profile=mo.cavity_air_profile,
         probe_height_frac=0.5 if mo.cavity_air_probe == "mid_height" else None,
-        slat_film_equal_ms=(equal_speed_ms(slat_width_m=lv.slat_width_m,
-                                           height_m=cfg.facade.glazed_height_m)
-                            if lv is not None and mo.slat_film == "speed_dependent" else 0.0),
+        slat_film_equal_ms=(panel_equal_speed_ms(cfg) if mo.slat_film == "speed_dependent"
+                            else 0.0),
         slat_film_reference_ms=mo.slat_film_reference_speed_ms,
     )
 

@@ -27,12 +27,16 @@ Pure functions (no I/O). Air properties at 300 K from Incropera & DeWitt, Table 
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from dsfd.physics.constants import GRAVITY
 
-__all__ = ["equal_speed_ms", "film_factor"]
+if TYPE_CHECKING:
+    from dsfd.config.panel import PanelConfig
+
+__all__ = ["equal_speed_ms", "film_factor", "panel_equal_speed_ms"]
 
 #: Air at 300 K (Incropera & DeWitt, Table A.4): conductivity [W/(m K)], kinematic
 #: viscosity [m²/s], Prandtl number [-].
@@ -61,6 +65,15 @@ def equal_speed_ms(*, slat_width_m: float, height_m: float, excess_k: float = 10
     h_n = (0.825 + cc * ra ** (1.0 / 6.0)) ** 2 * K_AIR / height_m
     c_f = 0.664 * K_AIR * PR_AIR ** (1.0 / 3.0) / math.sqrt(NU_AIR * slat_width_m)
     return (h_n / c_f) ** 2
+
+
+def panel_equal_speed_ms(cfg: PanelConfig) -> float:
+    """v_e [m/s] of the panel's slats over its glazed height (:func:`equal_speed_ms`);
+    0 for a panel without louver (no slat film to scale)."""
+    lv = cfg.louver
+    if lv is None:
+        return 0.0
+    return equal_speed_ms(slat_width_m=lv.slat_width_m, height_m=cfg.facade.glazed_height_m)
 
 
 def film_factor(speed_ms: np.ndarray, *, equal_speed_ms: float,

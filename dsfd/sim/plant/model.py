@@ -31,7 +31,7 @@ from dsfd.config.parameters import CONVECTIVE_NAMES, Param
 from dsfd.physics.airflow import louver_flow_loss
 from dsfd.physics.constants import GRAVITY, R_AIR, SIGMA
 from dsfd.physics.forcing import TERRAIN_PROFILE
-from dsfd.physics.slat_film import equal_speed_ms, film_factor
+from dsfd.physics.slat_film import film_factor, panel_equal_speed_ms
 from dsfd.sim.plant.actuators import Actuators
 from dsfd.sim.plant.advection import Advection2
 from dsfd.sim.plant.config import PlantOptions, TrueParameters
@@ -132,9 +132,8 @@ class PlantModel:
         self.gap = geo.depth / 2 if has_louver else geo.depth
         self.h_default = np.array(cfg.parameters.values("default", CONVECTIVE_NAMES))
         #: v_e of the slat film's factor (0: h_ca2 constant; docs/model.md#slat-film).
-        self.slat_equal_ms = (equal_speed_ms(slat_width_m=lv.slat_width_m,
-                                             height_m=cfg.facade.glazed_height_m)
-                              if lv and options.slat_film_reference_speed_ms > 0 else 0.0)
+        self.slat_equal_ms = (panel_equal_speed_ms(cfg)
+                              if options.slat_film_reference_speed_ms > 0 else 0.0)
         # Local wind of each segment relative to the façade centre (power law,
         # docs/model.md#plant-heat-transfer).
         a_site, _ = TERRAIN_PROFILE[cfg.site.terrain]
