@@ -80,7 +80,8 @@ NAMES: dict[str, tuple[tuple[str, str | None], ...]] = {
                   ("parameter_shift", "parameter:q_x3")),
     "tc-drift": (("night_offset_shift", "night:q_x3"), ("residual_shift", "residual:x3_c"),
                  ("parameter_shift", "parameter:q_x3")),
-    "soiling": (),
+    # the solar detector, whose action names dirt where the pane and the slats both fell
+    "soiling": (("solar_gain_shift", None),),
     "screen": (("parameter_shift", "parameter:f"),),
 }
 

@@ -90,6 +90,7 @@ from dsfd.storage.parameter_series import (
     parameter_unit,
 )
 from dsfd.storage.schema import BUSY_TIMEOUT_MS
+from dsfd.storage.solar_series import SOLAR_EVERY_S, SolarDays
 
 __all__ = ["CHECK_EVERY_S", "CROSSCHECK_WINDOW_S", "DAMPER_SHORT", "FLOW_CONFIRM_S",
            "NIGHT_EVERY_S", "NIGHT_MIN_S", "NIGHT_OFFSET_EVERY_S", "NIGHT_OFFSET_MIN_S",
@@ -126,7 +127,8 @@ PARAMETER_RELEASE_S = 86400.0
 NIGHT_OFFSET_EVERY_S = 3600.0
 #: How often the detectors that need days of history run: (name, every [s]).
 _CADENCE = (("residual", RESIDUAL_EVERY_S), ("night", NIGHT_EVERY_S),
-            ("parameter", PARAMETER_EVERY_S), ("night_offset", NIGHT_OFFSET_EVERY_S))
+            ("parameter", PARAMETER_EVERY_S), ("night_offset", NIGHT_OFFSET_EVERY_S),
+            ("solar", SOLAR_EVERY_S))
 _FLOW_KINDS = ("damper_no_flow", "cavity_no_flow", "cavity_flow_when_closed")
 #: A cross-check finding opens once three checks over 10 min report it (the alarm time
 #: delay of estimation.lifecycle.confirmed): on the bench's clean winter days a weak healthy
@@ -264,6 +266,8 @@ class FindingsStage:
         self.night = night
         #: The energy at stake of parameter findings, with the panel (None: not costed).
         self.stakes = None if panel is None else StakeCache(panel, database.parent)
+        #: The solar detector's days, with the panel (None: not run).
+        self.solar = None if panel is None else SolarDays(panel, database.parent)
         self.every_s = every_s
         self._last_s: float | None = None
         #: The last check that ran the residual CUSUM, the night check, the parameters.
@@ -280,6 +284,8 @@ class FindingsStage:
         """Cost the stakes from now on with ``panel`` (a reload); those costed are redone."""
         if self.stakes is not None:
             self.stakes = StakeCache(panel, self.database.parent)
+        if self.solar is not None:
+            self.solar = SolarDays(panel, self.database.parent)
 
     def after_cycle(self, now_s: float) -> bool:
         """Start a check if one is due and none runs; whether one started."""
@@ -321,9 +327,12 @@ class FindingsStage:
                                night_offsets=self.night if "night_offset" in due else None)
         if self.stakes is not None:
             found = self.stakes.apply(conn, found, now_s)
+        if self.solar is not None and "solar" in due:
+            found += [f for f in (self.solar.finding(conn, now_s),) if f is not None]
+            judged.add("solar_gain_shift")
         for name, kind in (("residual", "residual_shift"), ("night", "pane_offset_shift"),
                            ("parameter", "parameter_shift"),
-                           ("night_offset", "night_offset_shift")):
+                           ("night_offset", "night_offset_shift"), ("solar", "solar_gain_shift")):
             if kind in judged:
                 self._ran_s[name] = now_s
         stored = table.load(conn)
@@ -331,7 +340,8 @@ class FindingsStage:
                                          confirm_s=FLOW_CONFIRM_S, kinds=_FLOW_KINDS)
         changes, self._absent = held_open(
             reconcile(found, stored, judged=judged), stored, self._absent, now_s=now_s,
-            release_s=PARAMETER_RELEASE_S, kinds=("parameter_shift",), judged=judged)
+            release_s=PARAMETER_RELEASE_S, kinds=("parameter_shift", "solar_gain_shift"),
+            judged=judged)
         opened = table.apply(conn, changes, now_s=now_s, run_id=self.run_id())
         for fid, f in zip(opened, changes.opened, strict=True):
             log.warning("finding #%d %s: %s", fid, f.kind, f.action, finding_id=fid,

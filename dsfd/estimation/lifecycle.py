@@ -34,7 +34,7 @@ OPEN, ACKNOWLEDGED, ENDED = "open", "acknowledged", "ended"
 #: Every kind the detectors report (one Home Assistant problem sensor and one metric each).
 FINDING_KINDS = ("damper_no_flow", "cavity_no_flow", "cavity_flow_when_closed",
                  "pane_out_of_bounds", "pane_offset_shift", "residual_shift", "parameter_shift",
-                 "night_offset_shift")
+                 "night_offset_shift", "solar_gain_shift")
 #: Kinds about one signal: the subject is the evidence's signal.
 _SIGNAL_KINDS = frozenset({"residual_shift", "parameter_shift", "pane_out_of_bounds",
                            "pane_offset_shift", "night_offset_shift"})

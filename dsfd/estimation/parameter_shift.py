@@ -21,7 +21,7 @@ import numpy as np
 from dsfd.estimation.diagnostics import Evidence, Finding, cusum_confidence, page_cusum
 from dsfd.estimation.parameter_watch import SECONDS_PER_DAY, parameter_action
 
-__all__ = ["ParameterSettings", "between_day_variance", "parameter_change"]
+__all__ = ["ParameterSettings", "between_day_variance", "parameter_change", "standardised_days"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -118,7 +118,25 @@ def parameter_change(times_s: np.ndarray, values: np.ndarray, sds: np.ndarray, *
     st = settings or ParameterSettings()
     t = np.asarray(times_s, float)
     v = np.asarray(values, float)
-    sd = np.asarray(sds, float)
+    z, ref_mean = standardised_days(t, v, np.asarray(sds, float), st)
+    cs = page_cusum(z, k=st.k_sd, h=st.h_sd)
+    if cs.alarm is None:
+        return None
+    after = slice(cs.start, cs.alarm + 1)
+    ev = Evidence(signal=f"parameter:{name}", shift=float(np.nanmean(v[after] - ref_mean[after])),
+                  shift_sd=float(np.nanmean(z[after])), unit=unit, since_s=float(t[cs.start]),
+                  statistic=float(cs.statistic[-1]), threshold=st.h_sd)
+    return Finding(kind="parameter_shift", confidence=cusum_confidence(ev.statistic, st.h_sd),
+                   start_s=ev.since_s, detected_s=float(t[cs.alarm]), evidence=(ev,),
+                   action=parameter_action(name, side=cs.side, shift=ev.shift,
+                                           shift_sd=ev.shift_sd, unit=unit))
+
+
+def standardised_days(t: np.ndarray, v: np.ndarray, sd: np.ndarray,
+                      st: ParameterSettings) -> tuple[np.ndarray, np.ndarray]:
+    """Each daily value's distance from its trailing reference in units of its spread, and
+    the reference means (NaN where the history is too short; :func:`parameter_change`,
+    Notes)."""
     z = np.full(v.size, np.nan)
     ref_mean = np.full(v.size, np.nan)
     ok = np.isfinite(v) & np.isfinite(sd) & (sd > 0)
@@ -136,14 +154,4 @@ def parameter_change(times_s: np.ndarray, values: np.ndarray, sds: np.ndarray, *
         w = 1.0 / (sd[sel] ** 2 + tau2)
         ref_mean[i] = float(np.sum(w * v[sel]) / np.sum(w))
         z[i] = (v[i] - ref_mean[i]) / math.sqrt(sd[i] ** 2 + tau2 + 1.0 / float(np.sum(w)))
-    cs = page_cusum(z, k=st.k_sd, h=st.h_sd)
-    if cs.alarm is None:
-        return None
-    after = slice(cs.start, cs.alarm + 1)
-    ev = Evidence(signal=f"parameter:{name}", shift=float(np.nanmean(v[after] - ref_mean[after])),
-                  shift_sd=float(np.nanmean(z[after])), unit=unit, since_s=float(t[cs.start]),
-                  statistic=float(cs.statistic[-1]), threshold=st.h_sd)
-    return Finding(kind="parameter_shift", confidence=cusum_confidence(ev.statistic, st.h_sd),
-                   start_s=ev.since_s, detected_s=float(t[cs.alarm]), evidence=(ev,),
-                   action=parameter_action(name, side=cs.side, shift=ev.shift,
-                                           shift_sd=ev.shift_sd, unit=unit))
+    return z, ref_mean

@@ -32,7 +32,7 @@ MAX_FIGURES = 6
 _STATE_ORDER = {"open": 0, "acknowledged": 1, "ended": 2}
 #: Kinds whose statistic is a CUSUM in standardised units (the others: the signal's unit).
 _CUSUM_KINDS = frozenset({"residual_shift", "parameter_shift", "pane_offset_shift",
-                          "night_offset_shift"})
+                          "night_offset_shift", "solar_gain_shift"})
 
 
 @dataclass(frozen=True)
@@ -90,7 +90,8 @@ def build_diagnostics(history: History, config: Mapping[str, Any] | None, *, off
             if len(figures) >= MAX_FIGURES:
                 no_figure[fid] = f"not drawn: the report draws at most {MAX_FIGURES}"
                 continue
-            fig = evidence_figure(conn, row, offset_h=offset_h, config=config)
+            fig = evidence_figure(conn, row, offset_h=offset_h, config=config,
+                                  state_dir=history.path.parent)
             if isinstance(fig, str):
                 no_figure[fid] = fig
                 continue
@@ -126,6 +127,14 @@ def _caption(row: Mapping[str, Any]) -> str:
                 "5 previous days); below, Page's CUSUM of the standardised blocks, recomputed "
                 "from the stored rows, against its threshold. At night no sun moves the "
                 "offset: a sensor that reads off does.")
+    elif kind == "solar_gain_shift":
+        what = ("Per day, the least-squares share of the sun the model computes from the "
+                "clean façade's optics that the calibration's heat-flux offsets remove "
+                "(Σ q·S / Σ S² over the steps with the slats in the sun; negative: the façade "
+                "takes less sun than computed) ± its standard error, recomputed from the "
+                "stored weather, commands and offsets, and the same share for the exterior "
+                "pane and the slats alone. Dirt on the glass lowers both; slats at another "
+                "angle than their read-back lower or raise the slats' alone.")
     elif kind == "parameter_shift":
         what = ("Each on-line estimate of the parameter and the daily values the detector "
                 "judges (the precision-weighted mean of the day's estimates) ± the posterior "

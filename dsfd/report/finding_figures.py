@@ -14,6 +14,7 @@ from __future__ import annotations
 import dataclasses
 import sqlite3
 from collections.abc import Callable, Mapping
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -57,7 +58,8 @@ from dsfd.storage.parameter_series import (
 )
 
 __all__ = ["FLOW_KINDS", "NIGHT_KINDS", "NoEvidence", "evidence_figure", "flow_figure",
-           "night_figure", "night_offset_figure", "parameter_figure", "residual_figure"]
+           "night_figure", "night_offset_figure", "parameter_figure", "residual_figure",
+           "solar_figure"]
 
 FLOW_KINDS = ("damper_no_flow", "cavity_no_flow", "cavity_flow_when_closed")
 NIGHT_KINDS = ("pane_out_of_bounds", "pane_offset_shift")
@@ -334,6 +336,49 @@ def parameter_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h:
     return fig
 
 
+def solar_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h: float,
+                 config: Mapping[str, Any] | None, state_dir: Path) -> Figure:
+    """The daily share of the computed sun the offsets remove (the solar detector's input,
+    recomputed from the stored rows) ± its standard error, and the exterior pane's and the
+    slats' own shares, with the level of the days before the start."""
+    from dsfd.config import ConfigError, panel_from_mapping
+    from dsfd.storage.solar_series import SolarDays
+
+    try:
+        panel = panel_from_mapping(dict(config or {}), source="the stored configuration")
+    except ConfigError as exc:
+        raise NoEvidence(f"the stored configuration does not load ({exc})") from exc
+    days = SolarDays(panel, state_dir).days(conn, _end_s(row))
+    if not days:
+        raise NoEvidence("no day with two hours of sun before the last check")
+    t = np.array([d.time_s for d in days])
+    b = np.array([d.factor for d in days])
+    nodes = np.array([d.node_factors for d in days])
+    ax_t = _Axes(offset_h, float(t[0]) - 86400.0, _end_s(row))
+    fig = Figure(figsize=(WIDTH_IN, 4.2), layout="constrained")
+    ax = fig.subplots()
+    fig.suptitle(f"#{row['finding_id']} solar_gain_shift: share of the computed sun the "
+                 "offsets remove, day by day", fontsize=12, x=0.01, ha="left")
+    ax.errorbar(ax_t.local(t), b, yerr=[d.sd for d in days], fmt="o", ms=4, capsize=3,
+                color="#1f77b4", label="all nodes ± standard error (the detector's input)")
+    ax.plot(ax_t.local(t), nodes[:, 0], "s", ms=3.5, color="#ff7f0e", mfc="none",
+            label="exterior pane x1 alone (none: its offset was held)")
+    ax.plot(ax_t.local(t), nodes[:, 3], "^", ms=3.5, color="#2ca02c", mfc="none",
+            label="slats x4 alone")
+    before = t < float(row["start_s"])
+    if before.any():
+        level = float(np.mean(b[before][-7:]))
+        ax.plot(ax_t.local(np.array([t[before][-7:][0], float(row["start_s"])])),
+                [level, level], color="black", ls="--", lw=1.1,
+                label="level of the days before the start")
+    ax.axhline(0.0, color="#888888", lw=0.8)
+    ax.set_ylabel("offset / computed sun\n[-]")
+    ax_t.marks(ax, row, legend=True)
+    ax.legend(**OUTSIDE)
+    ax_t.setup(ax, label=True)
+    return fig
+
+
 def _online_estimates(conn: sqlite3.Connection, name: str, since_s: float, until_s: float
                       ) -> np.ndarray:
     """(time, value) of a parameter's on-line estimates; a heat-flux offset is read from the
@@ -350,7 +395,8 @@ def _online_estimates(conn: sqlite3.Connection, name: str, since_s: float, until
 
 
 def evidence_figure(conn: sqlite3.Connection, row: Mapping[str, Any], *, offset_h: float,
-                    config: Mapping[str, Any] | None) -> Figure | str:
+                    config: Mapping[str, Any] | None, state_dir: Path | None = None
+                    ) -> Figure | str:
     """The figure of one stored finding (a row of :func:`dsfd.storage.findings.
     findings_between`), or why there is none (a kind with no figure, or no rows to draw it
     from)."""
@@ -360,6 +406,8 @@ def evidence_figure(conn: sqlite3.Connection, row: Mapping[str, Any], *, offset_
         **{k: (lambda: night_figure(conn, row, offset_h, config)) for k in NIGHT_KINDS},
         "parameter_shift": lambda: parameter_figure(conn, row, offset_h),
         "night_offset_shift": lambda: night_offset_figure(conn, row, offset_h, config)}
+    if state_dir is not None:
+        draw["solar_gain_shift"] = lambda: solar_figure(conn, row, offset_h, config, state_dir)
     f = draw.get(str(row["kind"]))
     if f is None:
         return f"no figure for a {row['kind']} finding"
