@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from dsfd.config.panel import REGIME_OPENINGS
+from dsfd.estimation.solar_response import DIRT, DIRT_OR_LOUVER, LOUVER_OR_CLEANED
 from dsfd.storage.evidence import DAMPER_SHORT
 
 __all__ = ["NAMES", "PREFIX_DAYS", "SECONDS_PER_DAY", "SUN_GHI_WM2", "Scenario", "scenarios",
@@ -72,16 +73,18 @@ class Scenario:
 #: detector of its own yet, and is at best detected by another kind.
 NAMES: dict[str, tuple[tuple[str, str | None], ...]] = {
     "stuck-damper": (("damper_no_flow", None),),
-    # the louver's heat-flux offset and the slats' convection: both actions name a slip
-    "louver-slip": (("parameter_shift", "parameter:q_x4"), ("parameter_shift", "parameter:h_ca2")),
+    # the louver's heat-flux offset and the slats' convection: both actions name a slip; the
+    # solar detector where it names the louver (with dirt, or with cleaned glass)
+    "louver-slip": (("parameter_shift", "parameter:q_x4"), ("parameter_shift", "parameter:h_ca2"),
+                    ("solar_gain_shift", DIRT_OR_LOUVER), ("solar_gain_shift", LOUVER_OR_CLEANED)),
     # the inner pane's heat-flux offset, at night or as daily means: its action names the
     # sensor x3 first
     "tc-offset": (("night_offset_shift", "night:q_x3"), ("residual_shift", "residual:x3_c"),
                   ("parameter_shift", "parameter:q_x3")),
     "tc-drift": (("night_offset_shift", "night:q_x3"), ("residual_shift", "residual:x3_c"),
                  ("parameter_shift", "parameter:q_x3")),
-    # the solar detector, whose action names dirt where the pane and the slats both fell
-    "soiling": (("solar_gain_shift", None),),
+    # the solar detector where it names dirt (alone, or with the louver)
+    "soiling": (("solar_gain_shift", DIRT), ("solar_gain_shift", DIRT_OR_LOUVER)),
     "screen": (("parameter_shift", "parameter:f"),),
 }
 

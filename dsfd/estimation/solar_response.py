@@ -19,7 +19,7 @@ the spread, not a finding.
 
 The same factor per node tells two causes apart: dirt takes sun from the exterior pane x1
 and the slats x4 alike, a louver whose slats sit at another angle than their read-back
-changes the slats' share only (:func:`solar_action`).
+changes the slats' share only (:func:`solar_cause`).
 """
 
 from __future__ import annotations
@@ -31,8 +31,9 @@ import numpy as np
 from dsfd.estimation.diagnostics import Evidence, Finding, cusum_confidence, page_cusum
 from dsfd.estimation.parameter_shift import ParameterSettings, standardised_days
 
-__all__ = ["SOLAR_SIGNAL", "DailySolarResponse", "SolarSettings", "solar_action",
-           "solar_response", "solar_response_change"]
+__all__ = ["DIRT", "DIRT_OR_LOUVER", "LOUVER_OR_CLEANED", "SOLAR_SIGNAL", "DailySolarResponse",
+           "SolarSettings", "solar_action", "solar_cause", "solar_response",
+           "solar_response_change"]
 
 #: The evidence's signal (the pooled factor b) and the per-node factors' prefix.
 SOLAR_SIGNAL = "solar_response"
@@ -162,7 +163,8 @@ def solar_response_change(days: list[DailySolarResponse], *,
     :func:`~dsfd.estimation.parameter_shift.standardised_days`), then the two-sided CUSUM
     with ``settings.days``' allowance and threshold. The finding's evidence is b's shift
     and, per node of the exterior pane x1 and the slats x4, that node's own shift over the
-    same days against the same reference (:func:`solar_action` names the cause from them).
+    same days against the same reference (:func:`solar_cause` names the cause from them; the
+    finding's subject).
     """
     st = settings or SolarSettings()
     if not days:
@@ -190,36 +192,50 @@ def solar_response_change(days: list[DailySolarResponse], *,
         ev.append(Evidence(signal=f"{SOLAR_SIGNAL}:x{i + 1}", shift=node_shift[i],
                            shift_sd=float("nan"), unit="1", since_s=float(t[cs.start]),
                            statistic=float("nan"), threshold=float("nan")))
+    cause = solar_cause(shift, pane_shift=node_shift.get(0), slat_shift=node_shift.get(3))
     return Finding(kind="solar_gain_shift", confidence=cusum_confidence(ev[0].statistic, g.h_sd),
                    start_s=float(t[cs.start]), detected_s=float(t[cs.alarm]),
-                   evidence=tuple(ev),
-                   action=solar_action(shift, pane_shift=node_shift.get(0),
-                                       slat_shift=node_shift.get(3)))
+                   evidence=tuple(ev), subject=cause, action=solar_action(shift, cause))
 
 
-def solar_action(shift: float, *, pane_shift: float | None, slat_shift: float | None) -> str:
-    """What to check when the share of the computed sun the façade takes moved by ``shift``
-    (b's change: −0.1 = a tenth less), from the exterior pane's and the slats' own shifts.
+#: What a solar finding names (its subject): dirt alone, dirt or the louver, and for a rise
+#: the louver or cleaned glass.
+DIRT, DIRT_OR_LOUVER, LOUVER_OR_CLEANED = ("exterior glass", "exterior glass or louver",
+                                          "louver or cleaned glass")
+
+
+def solar_cause(shift: float, *, pane_shift: float | None, slat_shift: float | None) -> str:
+    """What the change of b by ``shift`` names, from the exterior pane's and the slats' own
+    shifts: :data:`DIRT`, :data:`DIRT_OR_LOUVER` or :data:`LOUVER_OR_CLEANED`.
 
     Dirt on the exterior glass takes the same share from every layer behind it and from the
     pane itself (its film absorbs what the glass no longer does, or scatters it away), so
     both nodes fall alike; slats at another angle than their read-back change the slats'
     share while the exterior pane's stays. Where the pane's shift is less than a third of
-    the slats' (or unknown), the two causes are named together."""
+    the slats' (or unknown: its offset held), the two causes are named together."""
+    if shift >= 0:
+        return LOUVER_OR_CLEANED
+    both = (slat_shift is not None and pane_shift is not None and slat_shift < 0
+            and pane_shift <= slat_shift / 3.0)
+    return DIRT if both else DIRT_OR_LOUVER
+
+
+def solar_action(shift: float, cause: str) -> str:
+    """What to check when the share of the computed sun the façade takes moved by ``shift``
+    (b's change: −0.1 = a tenth less) and the evidence names ``cause``
+    (:func:`solar_cause`)."""
     pct = f"{abs(shift):.0%}"
-    if shift < 0:
-        head = (f"the façade takes about {pct} less of the sun than the model computes from "
-                "its clean optics, compared with the days before")
-        both = (slat_shift is not None and pane_shift is not None and slat_shift < 0
-                and pane_shift <= slat_shift / 3.0)
-        if both:
-            return (f"{head}, on the exterior pane and the slats alike: dirt on the exterior "
-                    "glass; clean it (the pyranometer reading low looks the same: check it "
-                    "against a clear-sky day first)")
-        return (f"{head}: dirt on the exterior glass (clean it) or the slats sitting at "
-                "another angle than their read-back (a slipped motor step: compare the angle "
-                "by eye with the read-back); the evidence cannot tell these apart")
-    return (f"the façade takes about {pct} more of the sun than the model computes, "
-            "compared with the days before: the exterior glass was cleaned (nothing to do), "
-            "or the slats sit at another angle than their read-back (compare the angle by "
-            "eye), or the pyranometer reads high")
+    if cause == LOUVER_OR_CLEANED:
+        return (f"the façade takes about {pct} more of the sun than the model computes, "
+                "compared with the days before: the exterior glass was cleaned (nothing to "
+                "do), or the slats sit at another angle than their read-back (compare the "
+                "angle by eye), or the pyranometer reads high")
+    head = (f"the façade takes about {pct} less of the sun than the model computes from its "
+            "clean optics, compared with the days before")
+    if cause == DIRT:
+        return (f"{head}, on the exterior pane and the slats alike: dirt on the exterior "
+                "glass; clean it (the pyranometer reading low looks the same: check it "
+                "against a clear-sky day first)")
+    return (f"{head}: dirt on the exterior glass (clean it) or the slats sitting at another "
+            "angle than their read-back (a slipped motor step: compare the angle by eye with "
+            "the read-back); the evidence cannot tell these apart")

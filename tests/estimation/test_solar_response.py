@@ -9,6 +9,8 @@ import numpy as np
 import pytest
 
 from dsfd.estimation.solar_response import (
+    DIRT,
+    DIRT_OR_LOUVER,
     DailySolarResponse,
     SolarSettings,
     solar_response,
@@ -104,6 +106,7 @@ def test_soiling_is_found_after_its_start_and_named():
     assert onset_s <= found.detected_s <= onset_s + 7 * DAY
     assert found.evidence[0].shift < -0.03
     assert "dirt on the exterior glass; clean it" in found.action
+    assert found.subject == DIRT
     pane = {e.signal: e.shift for e in found.evidence}
     assert pane["solar_response:x1"] < -0.03 and pane["solar_response:x4"] < -0.03
 
@@ -113,6 +116,7 @@ def test_a_loss_on_the_slats_alone_names_both_causes():
     found = solar_response_change(history)
     assert found is not None
     assert "slipped motor step" in found.action and "cannot tell these apart" in found.action
+    assert found.subject == DIRT_OR_LOUVER
 
 
 @pytest.mark.parametrize("seed", range(8))
