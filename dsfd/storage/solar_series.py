@@ -6,7 +6,7 @@ commands applied (read as ``dsfd export`` reads them, :mod:`dsfd.storage.history
 heat-flux offsets in force at each step are those of the last on-line calibration row, and
 :func:`dsfd.estimation.solar_response.solar_response` gives the day's factor. A day is
 computed once it has ended and kept (:class:`SolarDays`); a restart computes the last
-month's days again from the store (about 0.3 s of CPU a day).
+month's days again from the store (about 0.15 s of CPU a day of one-minute cycles).
 """
 
 from __future__ import annotations
@@ -34,8 +34,8 @@ from dsfd.storage.parameter_series import offset_series
 __all__ = ["SOLAR_EVERY_S", "SolarDays", "solar_day_start_s"]
 
 SECONDS_PER_DAY = 86400.0
-#: The solar detector runs every 6 h: a day is judged once it ended, and a day of the
-#: detector's evidence adds a few tenths of its threshold at most.
+#: The solar detector runs every 6 h: a day is judged once it has ended, so a new day's
+#: value is judged within 6 h of the day's end (its days are solar days, not the check's).
 SOLAR_EVERY_S = 6 * 3600.0
 
 
