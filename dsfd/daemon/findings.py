@@ -328,8 +328,14 @@ class FindingsStage:
         if self.stakes is not None:
             found = self.stakes.apply(conn, found, now_s)
         if self.solar is not None and "solar" in due:
-            found += [f for f in (self.solar.finding(conn, now_s),) if f is not None]
-            judged.add("solar_gain_shift")
+            try:
+                solar = self.solar.finding(conn, now_s)
+            except Exception:  # a day the store cannot give must not stop the other detectors
+                self.failures += 1
+                log.exception("solar detector failed; the other detectors ran")
+            else:
+                found += [solar] if solar is not None else []
+                judged.add("solar_gain_shift")
         for name, kind in (("residual", "residual_shift"), ("night", "pane_offset_shift"),
                            ("parameter", "parameter_shift"),
                            ("night_offset", "night_offset_shift"), ("solar", "solar_gain_shift")):

@@ -23,6 +23,7 @@ from dsfd.estimation.params import OFFSET_NAMES
 from dsfd.estimation.stepdata import step_data
 from dsfd.report.diagnostics import build_diagnostics
 from dsfd.sim.replay import at_site, load_weather
+from dsfd.storage import findings as table
 from dsfd.storage.history import measured_from_history, read_history
 from dsfd.storage.solar_series import SOLAR_EVERY_S, SolarDays, solar_day_start_s
 from dsfd.storage.timeseries import CycleRecord, Store
@@ -169,3 +170,32 @@ def test_the_report_draws_the_days_the_detector_judged(soiled, tmp_path):
     assert fid in drawn.figures and "share of the sun" in drawn.figures[fid].caption
     bare = build_diagnostics(history, None, offset_h=9.0, dpi=40)
     assert "configuration" in bare.no_figure[fid]
+
+
+def test_a_solar_detector_that_fails_leaves_the_other_detectors_and_its_findings(
+        soiled, tmp_path):
+    """A store the solar detector cannot read (here: any error from it) is logged and
+    counted; the check itself goes on, and an open solar finding is not ended by a check
+    in which the detector did not run."""
+    db, first, _ = soiled
+    db = _copy(db, tmp_path) / "timeseries.sqlite"
+    stage = FindingsStage(db, run_id=lambda: 1, panel=PANEL)
+    conn = sqlite3.connect(db)
+    try:
+        for now in np.arange(first + DAY, first + DAYS * DAY, SOLAR_EVERY_S):
+            stage.check(conn, float(now))
+        assert [f for f in table.load(conn) if f.kind == "solar_gain_shift"
+                and f.state == "open"]
+
+        def broken(*_args: object) -> None:
+            raise KeyError("x4_c")
+
+        stage.solar.finding = broken  # type: ignore[union-attr, method-assign]
+        for k in range(1, 9):  # two days of checks, longer than the release delay
+            changes = stage.check(conn, first + DAYS * DAY + k * SOLAR_EVERY_S)
+            assert not [f for f in changes.ended]
+        assert stage.failures == 8
+        assert [f for f in table.load(conn) if f.kind == "solar_gain_shift"
+                and f.state == "open"]
+    finally:
+        conn.close()
