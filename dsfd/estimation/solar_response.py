@@ -30,6 +30,7 @@ import numpy as np
 
 from dsfd.estimation.diagnostics import Evidence, Finding, cusum_confidence, page_cusum
 from dsfd.estimation.parameter_shift import ParameterSettings, standardised_days
+from dsfd.estimation.parameter_watch import SECONDS_PER_DAY
 
 __all__ = ["DIRT", "DIRT_OR_LOUVER", "LOUVER_OR_CLEANED", "SOLAR_SIGNAL", "DailySolarResponse",
            "SolarSettings", "solar_action", "solar_cause", "solar_response",
@@ -39,6 +40,11 @@ __all__ = ["DIRT", "DIRT_OR_LOUVER", "LOUVER_OR_CLEANED", "SOLAR_SIGNAL", "Daily
 SOLAR_SIGNAL = "solar_response"
 #: A node's offset that moved less than this over a day's sunny steps [W/m2] was held.
 MOVED_WM2 = 0.1
+
+#: What a solar finding names (its subject): dirt alone, dirt or the louver, and for a rise
+#: the louver or cleaned glass.
+DIRT, DIRT_OR_LOUVER, LOUVER_OR_CLEANED = ("exterior glass", "exterior glass or louver",
+                                          "louver or cleaned glass")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -182,12 +188,12 @@ def solar_response_change(days: list[DailySolarResponse], *,
                    threshold=st.days.h_sd)]
     nodes = np.array([d.node_factors for d in days])
     g = st.days
-    before = ((t >= t[cs.start] - (g.guard_days + g.reference_days) * 86400.0)
-              & (t < t[cs.start] - g.guard_days * 86400.0))
+    before = ((t >= t[cs.start] - (g.guard_days + g.reference_days) * SECONDS_PER_DAY)
+              & (t < t[cs.start] - g.guard_days * SECONDS_PER_DAY))
     node_shift = {}
     for i in (0, 3):
-        if not np.isfinite(nodes[:, i]).any() or not before.any():
-            continue
+        if not (np.isfinite(nodes[after, i]).any() and np.isfinite(nodes[before, i]).any()):
+            continue  # the node's offset was held on those days: no evidence of its own
         node_shift[i] = float(np.nanmean(nodes[after, i]) - np.nanmean(nodes[before, i]))
         ev.append(Evidence(signal=f"{SOLAR_SIGNAL}:x{i + 1}", shift=node_shift[i],
                            shift_sd=float("nan"), unit="1", since_s=float(t[cs.start]),
@@ -196,12 +202,6 @@ def solar_response_change(days: list[DailySolarResponse], *,
     return Finding(kind="solar_gain_shift", confidence=cusum_confidence(ev[0].statistic, g.h_sd),
                    start_s=float(t[cs.start]), detected_s=float(t[cs.alarm]),
                    evidence=tuple(ev), subject=cause, action=solar_action(shift, cause))
-
-
-#: What a solar finding names (its subject): dirt alone, dirt or the louver, and for a rise
-#: the louver or cleaned glass.
-DIRT, DIRT_OR_LOUVER, LOUVER_OR_CLEANED = ("exterior glass", "exterior glass or louver",
-                                          "louver or cleaned glass")
 
 
 def solar_cause(shift: float, *, pane_shift: float | None, slat_shift: float | None) -> str:
