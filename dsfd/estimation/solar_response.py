@@ -63,9 +63,9 @@ class SolarSettings:
         the daily values: the parameter detector's, but an allowance of 1 spread instead
         of 1.5. Soiling is a ramp (the issue's 10 % over a week), which a trailing
         reference follows two days behind; on simulated histories of daily factors that
-        wander by 0.035 from day to day (the bench's clean winter days), the allowance 1
-        found the ramp within 7 days in a third of 200 histories and raised a finding in 9
-        of 200 clean 30-day ones, 1.5 in fewer and later, 0.75 in 45 % and 15 of 200
+        wander by 0.02 from day to day (the diagnostics bench's clean winter days), the
+        allowance 1 found the ramp within 7 days in 71 % of 200 histories and raised a
+        finding in 3 of 200 clean 30-day ones; 1.5 in 45 % and none, 0.75 in 80 % and 5
         (docs/model.md#diagnostics-solar).
     """
 
