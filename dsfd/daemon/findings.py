@@ -40,6 +40,12 @@ of them (:func:`~dsfd.estimation.parameter_watch.daily_estimates`, read by
 A detector that did not run in a check ends none of its findings, and a parameter finding
 ends only once the detector has missed it for :data:`PARAMETER_RELEASE_S`.
 
+Every :data:`~dsfd.storage.solar_series.SOLAR_EVERY_S`, when the stage knows the panel, it
+runs the solar detector (:func:`~dsfd.estimation.solar_response.solar_response_change`) on
+the daily share of the computed sun the heat-flux offsets remove, recomputed from the stored
+weather and commands (:class:`~dsfd.storage.solar_series.SolarDays`); a failure of it is
+logged and counted, and the other detectors' check goes on.
+
 A parameter finding gets the energy at stake of its change when the stage knows the panel
 (:func:`dsfd.daemon.stake.with_stake`: the model's J over the last week's stored weather and
 commands with the parameter before and after, docs/model.md#energy-at-stake).
@@ -328,6 +334,7 @@ class FindingsStage:
         if self.stakes is not None:
             found = self.stakes.apply(conn, found, now_s)
         if self.solar is not None and "solar" in due:
+            self._ran_s["solar"] = now_s  # a failure is tried again at its cadence, not at once
             try:
                 solar = self.solar.finding(conn, now_s)
             except Exception:  # a day the store cannot give must not stop the other detectors
