@@ -345,7 +345,7 @@ class FindingsStage:
                 judged.add("solar_gain_shift")
         for name, kind in (("residual", "residual_shift"), ("night", "pane_offset_shift"),
                            ("parameter", "parameter_shift"),
-                           ("night_offset", "night_offset_shift"), ("solar", "solar_gain_shift")):
+                           ("night_offset", "night_offset_shift")):
             if kind in judged:
                 self._ran_s[name] = now_s
         stored = table.load(conn)

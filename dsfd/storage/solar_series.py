@@ -19,6 +19,7 @@ import numpy as np
 
 from dsfd.config.panel import PanelConfig
 from dsfd.estimation.diagnostics import Finding
+from dsfd.estimation.parameter_watch import SECONDS_PER_DAY, day_start_s
 from dsfd.estimation.params import OFFSET_NAMES
 from dsfd.estimation.solar_response import (
     DailySolarResponse,
@@ -33,16 +34,16 @@ from dsfd.storage.parameter_series import offset_series
 
 __all__ = ["SOLAR_EVERY_S", "SolarDays", "solar_day_start_s"]
 
-SECONDS_PER_DAY = 86400.0
 #: The solar detector runs every 6 h: a day is judged once it has ended, so a new day's
 #: value is judged within 6 h of the day's end (its days are solar days, not the check's).
 SOLAR_EVERY_S = 6 * 3600.0
 
 
 def solar_day_start_s(time_s: float, longitude_deg: float) -> float:
-    """Start [s] of the solar day (from local mean solar midnight) that holds ``time_s``."""
-    shift = longitude_deg / 15.0 * 3600.0
-    return math.floor((time_s + shift) / SECONDS_PER_DAY) * SECONDS_PER_DAY - shift
+    """Start [s] of the solar day (from local mean solar midnight) that holds ``time_s``:
+    the days of :func:`~dsfd.estimation.parameter_watch.day_start_s` that end at the mean
+    solar midnight, ``longitude_deg``/15 h before 00:00 UTC."""
+    return day_start_s(time_s, end_s=-longitude_deg / 15.0 * 3600.0)
 
 
 class SolarDays:
