@@ -44,7 +44,10 @@ Every :data:`~dsfd.storage.solar_series.SOLAR_EVERY_S`, when the stage knows the
 runs the solar detector (:func:`~dsfd.estimation.solar_response.solar_response_change`) on
 the daily share of the computed sun the heat-flux offsets remove, recomputed from the stored
 weather and commands (:class:`~dsfd.storage.solar_series.SolarDays`); a failure of it is
-logged and counted, and the other detectors' check goes on.
+logged and counted, and the other detectors' check goes on. With the panel, a parameter
+finding of a heat-transfer coefficient whose change shows in the sunlit calibration windows
+alone is told as a ``solar_gain_shift`` (:func:`~dsfd.storage.solar_series.by_daylight`,
+docs/model.md#daylight-split).
 
 A parameter finding gets the energy at stake of its change when the stage knows the panel
 (:func:`dsfd.daemon.stake.with_stake`: the model's J over the last week's stored weather and
@@ -65,6 +68,7 @@ from dsfd.config.panel import PanelConfig
 from dsfd.daemon.logging_setup import get_logger
 from dsfd.daemon.stake import StakeCache
 from dsfd.estimation.crosschecks import cavity_flow_check, night_pane_check
+from dsfd.estimation.daylight_split import told_by_daylight
 from dsfd.estimation.diagnostics import Finding, residual_change, residual_settings
 from dsfd.estimation.lifecycle import Changes, confirmed, held_open, reconcile
 from dsfd.estimation.night_offsets import NIGHT_OFFSET_NAMES, night_offset_change
@@ -96,7 +100,7 @@ from dsfd.storage.parameter_series import (
     parameter_unit,
 )
 from dsfd.storage.schema import BUSY_TIMEOUT_MS
-from dsfd.storage.solar_series import SOLAR_EVERY_S, SolarDays
+from dsfd.storage.solar_series import SOLAR_EVERY_S, SolarDays, by_daylight
 
 __all__ = ["CHECK_EVERY_S", "CROSSCHECK_WINDOW_S", "DAMPER_SHORT", "FLOW_CONFIRM_S",
            "NIGHT_EVERY_S", "NIGHT_MIN_S", "NIGHT_OFFSET_EVERY_S", "NIGHT_OFFSET_MIN_S",
@@ -285,6 +289,9 @@ class FindingsStage:
         self._absent: dict[tuple[str, str], float] = {}
         #: Checks that failed (logged); the next one is tried as usual.
         self.failures = 0
+        #: The parameter findings the daylight split told as the sun's at the last run of
+        #: the parameter detector.
+        self._told: list[Finding] = []
 
     def reconfigure(self, panel: PanelConfig) -> None:
         """Cost the stakes from now on with ``panel`` (a reload); those costed are redone."""
@@ -323,6 +330,26 @@ class FindingsStage:
             self.failures += 1
             log.exception("findings check failed")
 
+    def _by_daylight(self, conn: sqlite3.Connection, found: list[Finding], judged: set[str],
+                     now_s: float) -> list[Finding]:
+        """``found`` with the parameter findings the daylight split tells as the sun's
+        (:func:`~dsfd.storage.solar_series.by_daylight`). They come from the parameter
+        detector: in a check where it did not run, those it told last stand (the solar
+        detector, judging their kind, would otherwise see them gone)."""
+        if "parameter_shift" not in judged:
+            return found + self._told
+        solar = self.solar
+        assert solar is not None
+        try:
+            found = by_daylight(conn, found, now_s, panel=solar.panel,
+                                solar_days=lambda: solar.days(conn, now_s))
+        except Exception:  # the findings as the parameter detector told them
+            self.failures += 1
+            log.exception("daylight split failed; the parameter findings stay as found")
+        self._told = [f for f in found if f.evidence
+                      and told_by_daylight(f.kind, f.evidence[0].signal)]
+        return found
+
     def check(self, conn: sqlite3.Connection, now_s: float) -> Changes:
         """One check at ``now_s`` on ``conn``: detect, reconcile, store, log."""
         due = {name for name, every in _CADENCE
@@ -343,6 +370,8 @@ class FindingsStage:
             else:
                 found += [solar] if solar is not None else []
                 judged.add("solar_gain_shift")
+        if self.solar is not None:
+            found = self._by_daylight(conn, found, judged, now_s)
         for name, kind in (("residual", "residual_shift"), ("night", "pane_offset_shift"),
                            ("parameter", "parameter_shift"),
                            ("night_offset", "night_offset_shift")):

@@ -33,7 +33,7 @@ from dsfd.estimation.parameter_shift import ParameterSettings, standardised_days
 from dsfd.estimation.parameter_watch import SECONDS_PER_DAY
 
 __all__ = ["DIRT", "DIRT_OR_LOUVER", "LOUVER_OR_CLEANED", "SOLAR_SIGNAL", "DailySolarResponse",
-           "SolarSettings", "solar_action", "solar_cause", "solar_response",
+           "SolarSettings", "factor_shift", "solar_action", "solar_cause", "solar_response",
            "solar_response_change"]
 
 #: The evidence's signal (the pooled factor b) and the per-node factors' prefix.
@@ -239,3 +239,19 @@ def solar_action(shift: float, cause: str) -> str:
     return (f"{head}: dirt on the exterior glass (clean it) or the slats sitting at another "
             "angle than their read-back (a slipped motor step: compare the angle by eye with "
             "the read-back); the evidence cannot tell these apart")
+
+
+def factor_shift(days: list[DailySolarResponse], *, since_s: float,
+                 settings: SolarSettings | None = None) -> float | None:
+    """The daily factor b's mean over the days from ``since_s`` minus its mean over the
+    reference days before them (the detector's guard and reference spans), or None when
+    either has no day: the direction of a change found elsewhere (< 0: less sun taken)."""
+    g = (settings or SolarSettings()).days
+    t = np.array([d.time_s for d in days], float)
+    b = np.array([d.factor for d in days], float)
+    after = t >= since_s
+    before = ((t >= since_s - (g.guard_days + g.reference_days) * SECONDS_PER_DAY)
+              & (t < since_s - g.guard_days * SECONDS_PER_DAY))
+    if not (after.any() and before.any()):
+        return None
+    return float(np.mean(b[after]) - np.mean(b[before]))

@@ -23,7 +23,7 @@ __all__ = ["TimeAxes", "block_figure", "broken"]
 
 
 class TimeAxes(Protocol):
-    """The time axes of one finding's figure (``finding_figures._Axes``)."""
+    """The time axes of one finding's figure (``figure_axes.FindingAxes``)."""
 
     lo_s: float
     hi_s: float

@@ -17,10 +17,11 @@ from html import escape
 from typing import Any
 
 from dsfd.estimation.crosschecks import FlowCheckSettings
+from dsfd.estimation.daylight_split import told_by_daylight
 from dsfd.measured import iso_utc
 from dsfd.report.plotting import ReportFigure, figure_html, png
 from dsfd.storage.evidence import NIGHT_MIN_S, NIGHT_OFFSET_MIN_S, RESIDUAL_MIN_S
-from dsfd.storage.findings import findings_between
+from dsfd.storage.findings import findings_between, first_signal
 from dsfd.storage.history import History
 from dsfd.storage.parameter_series import PARAMETER_MIN_DAYS
 from dsfd.storage.queries import open_read_only
@@ -127,6 +128,13 @@ def _caption(row: Mapping[str, Any]) -> str:
                 "5 previous days); below, Page's CUSUM of the standardised blocks, recomputed "
                 "from the stored rows, against its threshold. At night no sun moves the "
                 "offset: a sensor that reads off does.")
+    elif told_by_daylight(kind, first_signal(row)):
+        what = ("The calibrated coefficient's on-line estimates and daily values ± posterior "
+                "sd, apart for the calibration windows that were all night and those that "
+                "saw the sun, each with its level before the start. A property of air and "
+                "glass moves by night as by day; a change in the sunlit windows alone is "
+                "the sun the façade takes (dirt on the glass, or slats at another angle than "
+                "their read-back).")
     elif kind == "solar_gain_shift":
         what = ("Per day, the least-squares share of the sun the model computes from the "
                 "clean façade's optics that the calibration's heat-flux offsets remove "

@@ -18,12 +18,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from matplotlib.axes import Axes
-from matplotlib.dates import AutoDateLocator, ConciseDateFormatter
 from matplotlib.figure import Figure
 
 from dsfd.config.panel import Parameters
 from dsfd.estimation.crosschecks import FlowCheckSettings, NightCheckSettings, nightly_offsets
+from dsfd.estimation.daylight_split import told_by_daylight
 from dsfd.estimation.diagnostics import (
     residual_settings,
 )
@@ -35,8 +34,11 @@ from dsfd.estimation.night_offsets import (
 from dsfd.estimation.parameter_watch import LOG_UNIT
 from dsfd.estimation.params import OFFSET_NAMES
 from dsfd.report.cusum_figures import block_figure
-from dsfd.report.kpis import zone_name
+from dsfd.report.figure_axes import FindingAxes as _Axes
+from dsfd.report.figure_axes import NoEvidence
+from dsfd.report.figure_axes import end_s as _end_s
 from dsfd.report.plotting import OUTSIDE, STATE_COLOURS, STATE_LABELS, WIDTH_IN
+from dsfd.report.solar_figures import daylight_figure, solar_figure
 from dsfd.storage.evidence import (
     CROSSCHECK_WINDOW_S,
     NIGHT_OFFSET_REFERENCE_S,
@@ -50,6 +52,7 @@ from dsfd.storage.evidence import (
     night_series,
     residual_series,
 )
+from dsfd.storage.findings import first_signal
 from dsfd.storage.parameter_series import (
     PARAMETER_MIN_DAYS,
     offset_series,
@@ -58,59 +61,12 @@ from dsfd.storage.parameter_series import (
 )
 
 __all__ = ["FLOW_KINDS", "NIGHT_KINDS", "NoEvidence", "evidence_figure", "flow_figure",
-           "night_figure", "night_offset_figure", "parameter_figure", "residual_figure",
-           "solar_figure"]
+           "night_figure", "night_offset_figure", "parameter_figure", "residual_figure"]
 
 FLOW_KINDS = ("damper_no_flow", "cavity_no_flow", "cavity_flow_when_closed")
 NIGHT_KINDS = ("pane_out_of_bounds", "pane_offset_shift")
 _HOUR = 3600.0
-_MARKS = (("start_s", "start", "#ff7f0e", "--"), ("detected_s", "detected", "#d62728", "-"),
-          ("ended_s", "closed", "#555555", ":"))
 _PATH_COLOURS = ("#1f77b4", "#2ca02c", "#9467bd", "#8c564b", "#e377c2", "#17becf", "#bcbd22")
-
-
-class NoEvidence(Exception):  # noqa: N818 (not an error: a finding with nothing to draw)
-    """The database holds none of the rows the finding's figure needs (the message says
-    which)."""
-
-
-class _Axes:
-    """Local standard time on the axes of one finding's figure."""
-
-    def __init__(self, offset_h: float, lo_s: float, hi_s: float) -> None:
-        self.offset_h, self.lo_s, self.hi_s = offset_h, lo_s, hi_s
-
-    def local(self, time_s: np.ndarray | float) -> np.ndarray:
-        t = np.asarray(time_s, float) + self.offset_h * 3600.0
-        return (t * 1e3).astype("int64").astype("datetime64[ms]")
-
-    def setup(self, ax: Axes, *, label: bool) -> None:
-        locator = AutoDateLocator(minticks=3, maxticks=8)
-        ax.xaxis.set_major_locator(locator)
-        ax.xaxis.set_major_formatter(ConciseDateFormatter(locator))
-        # a little room on the right, so a detection at the window's end shows
-        pad = 0.02 * (self.hi_s - self.lo_s)
-        ax.set_xlim(self.local(self.lo_s), self.local(self.hi_s + pad))
-        ax.grid(True, alpha=0.3)
-        if label:
-            ax.set_xlabel(f"local standard time ({zone_name(self.offset_h)})")
-
-    def marks(self, ax: Axes, row: Mapping[str, Any], *, legend: bool) -> None:
-        """The finding's stored start, detection and end (when inside the window)."""
-        for key, name, colour, style in _MARKS:
-            t = row.get(key)
-            if t is None or not self.lo_s <= float(t) <= self.hi_s:
-                continue
-            what = f"{name} ({row['state']})" if key == "ended_s" else name
-            ax.axvline(self.local(float(t)), color=colour, ls=style, lw=1.3,
-                       label=what if legend else None)
-
-
-def _end_s(row: Mapping[str, Any]) -> float:
-    """The last time the finding's evidence was judged: its last check, or its end."""
-    ts = [float(row[k]) for k in ("detected_s", "last_seen_s", "ended_s")
-          if row.get(k) is not None]
-    return max(ts)
 
 
 def _signal(row: Mapping[str, Any]) -> str:
@@ -336,49 +292,6 @@ def parameter_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h:
     return fig
 
 
-def solar_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h: float,
-                 config: Mapping[str, Any] | None, state_dir: Path) -> Figure:
-    """The daily share of the computed sun the offsets remove (the solar detector's input,
-    recomputed from the stored rows) ± its standard error, and the exterior pane's and the
-    slats' own shares, with the level of the days before the start."""
-    from dsfd.config import ConfigError, panel_from_mapping
-    from dsfd.storage.solar_series import SolarDays
-
-    try:
-        panel = panel_from_mapping(dict(config or {}), source="the stored configuration")
-    except ConfigError as exc:
-        raise NoEvidence(f"the stored configuration does not load ({exc})") from exc
-    days = SolarDays(panel, state_dir).days(conn, _end_s(row))
-    if not days:
-        raise NoEvidence("no day with two hours of sun before the last check")
-    t = np.array([d.time_s for d in days])
-    b = np.array([d.factor for d in days])
-    nodes = np.array([d.node_factors for d in days])
-    ax_t = _Axes(offset_h, float(t[0]) - 86400.0, _end_s(row))
-    fig = Figure(figsize=(WIDTH_IN, 4.2), layout="constrained")
-    ax = fig.subplots()
-    fig.suptitle(f"#{row['finding_id']} solar_gain_shift: share of the computed sun the "
-                 "offsets remove, day by day", fontsize=12, x=0.01, ha="left")
-    ax.errorbar(ax_t.local(t), b, yerr=[d.sd for d in days], fmt="o", ms=4, capsize=3,
-                color="#1f77b4", label="all nodes ± standard error (the detector's input)")
-    ax.plot(ax_t.local(t), nodes[:, 0], "s", ms=3.5, color="#ff7f0e", mfc="none",
-            label="exterior pane x1 alone (none: its offset was held)")
-    ax.plot(ax_t.local(t), nodes[:, 3], "^", ms=3.5, color="#2ca02c", mfc="none",
-            label="slats x4 alone")
-    before = t < float(row["start_s"])
-    if before.any():
-        level = float(np.mean(b[before][-7:]))
-        ax.plot(ax_t.local(np.array([t[before][-7:][0], float(row["start_s"])])),
-                [level, level], color="black", ls="--", lw=1.1,
-                label="level of the days before the start")
-    ax.axhline(0.0, color="#888888", lw=0.8)
-    ax.set_ylabel("offset / computed sun\n[-]")
-    ax_t.marks(ax, row, legend=True)
-    ax.legend(**OUTSIDE)
-    ax_t.setup(ax, label=True)
-    return fig
-
-
 def _online_estimates(conn: sqlite3.Connection, name: str, since_s: float, until_s: float
                       ) -> np.ndarray:
     """(time, value) of a parameter's on-line estimates; a heat-flux offset is read from the
@@ -408,6 +321,8 @@ def evidence_figure(conn: sqlite3.Connection, row: Mapping[str, Any], *, offset_
         "night_offset_shift": lambda: night_offset_figure(conn, row, offset_h, config)}
     if state_dir is not None:
         draw["solar_gain_shift"] = lambda: solar_figure(conn, row, offset_h, config, state_dir)
+    if told_by_daylight(str(row["kind"]), first_signal(row)):
+        draw["solar_gain_shift"] = lambda: daylight_figure(conn, row, offset_h, config)
     f = draw.get(str(row["kind"]))
     if f is None:
         return f"no figure for a {row['kind']} finding"

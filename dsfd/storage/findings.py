@@ -14,7 +14,7 @@ from __future__ import annotations
 import json
 import math
 import sqlite3
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 from dsfd.estimation.diagnostics import Evidence
@@ -27,8 +27,8 @@ from dsfd.estimation.lifecycle import (
     subject_of,
 )
 
-__all__ = ["COLUMNS", "acknowledge", "apply", "evidence_json", "findings_between", "load",
-           "open_by_kind", "open_findings"]
+__all__ = ["COLUMNS", "acknowledge", "apply", "evidence_json", "findings_between",
+           "first_signal", "load", "open_by_kind", "open_findings"]
 
 #: Columns a reader gets from :func:`open_findings`.
 COLUMNS = ("finding_id", "run_id", "kind", "subject", "confidence", "start_s", "detected_s",
@@ -152,3 +152,9 @@ def open_by_kind(conn: sqlite3.Connection) -> dict[str, int]:
             "SELECT kind, COUNT(*) FROM findings WHERE state = ? GROUP BY kind", (OPEN,))}
     except sqlite3.Error:
         return {}
+
+
+def first_signal(row: Mapping[str, Any]) -> str:
+    """The signal of a stored finding's first evidence (a row of :func:`findings_between`;
+    '' without evidence)."""
+    return str((row.get("evidence") or [{}])[0].get("signal") or "")

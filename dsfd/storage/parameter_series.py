@@ -28,7 +28,8 @@ from dsfd.estimation.params import LINEAR_NAMES, OFFSET_NAMES
 from dsfd.storage.schema import PARAMETER_SD_COLUMNS
 
 __all__ = ["OFFSET_SD_FLOOR_WM2", "PARAMETER_MIN_DAYS", "PARAMETER_WINDOW_S", "DailySeries",
-           "offset_series", "offsets_of", "parameter_series", "parameter_unit"]
+           "offset_series", "offsets_of", "parameter_rows", "parameter_series",
+           "parameter_unit"]
 
 #: The parameter detector compares each day with the 7 days ending 2 days before it and
 #: needs 3 of them (ParameterSettings): it runs once 5 days make a series ...
@@ -64,28 +65,37 @@ def _since_restart(conn: sqlite3.Connection, until_s: float, window_s: float) ->
     return until_s - window_s if restart is None else max(until_s - window_s, float(restart))
 
 
+def parameter_rows(conn: sqlite3.Connection, now_s: float
+                   ) -> tuple[np.ndarray, dict[str, tuple[np.ndarray, np.ndarray]]]:
+    """The on-line estimates the detector reads at ``now_s``: their times [s], and per θ
+    parameter its values in the fitting coordinate (ln θ where positive) with their sd."""
+    since = _since_restart(conn, now_s, PARAMETER_WINDOW_S)
+    n = len(PARAMETER_NAMES)
+    stored = conn.execute(
+        f"SELECT time_s, {', '.join(PARAMETER_NAMES)}, {', '.join(PARAMETER_SD_COLUMNS)}, "
+        "other FROM parameters WHERE source = 'online' AND time_s >= ? AND time_s < ? "
+        "ORDER BY time_s", (since, now_s)).fetchall()
+    rows = np.array([r[:-1] for r in stored], float).reshape(-1, 1 + 2 * n)
+    out = {}
+    for i, name in enumerate(PARAMETER_NAMES):
+        value = rows[:, 1 + i]
+        if name not in LINEAR_NAMES:  # the fitting coordinate, in which the sd is given
+            value = np.log(np.where(value > 0, value, np.nan))
+        out[name] = (value, rows[:, 1 + n + i])
+    for name, value in _offset_columns([r[-1] for r in stored]).items():
+        out[name] = (value, np.full(len(stored), OFFSET_SD_FLOOR_WM2))
+    return rows[:, 0], out
+
+
 def parameter_series(conn: sqlite3.Connection, now_s: float
                      ) -> dict[str, DailySeries] | None:
     """Each θ parameter's and heat-flux offset's daily series over the 24-h days ending at
     ``now_s``; None while fewer than :data:`PARAMETER_MIN_DAYS` days make one (the detector
     does not run)."""
-    until = now_s  # the last day is the last 24 h, judged whole whenever the check runs
-    since = _since_restart(conn, until, PARAMETER_WINDOW_S)
-    n = len(PARAMETER_NAMES)
-    stored = conn.execute(
-        f"SELECT time_s, {', '.join(PARAMETER_NAMES)}, {', '.join(PARAMETER_SD_COLUMNS)}, "
-        "other FROM parameters WHERE source = 'online' AND time_s >= ? AND time_s < ? "
-        "ORDER BY time_s", (since, until)).fetchall()
-    rows = np.array([r[:-1] for r in stored], float).reshape(-1, 1 + 2 * n)
-    series = {}
-    for i, name in enumerate(PARAMETER_NAMES):
-        value = rows[:, 1 + i]
-        if name not in LINEAR_NAMES:  # the fitting coordinate, in which the sd is given
-            value = np.log(np.where(value > 0, value, np.nan))
-        series[name] = daily_estimates(rows[:, 0], value, rows[:, 1 + n + i], end_s=until)
-    floor = np.full(len(stored), OFFSET_SD_FLOOR_WM2)
-    for name, value in _offset_columns([r[-1] for r in stored]).items():
-        series[name] = daily_estimates(rows[:, 0], value, floor, end_s=until)
+    # the last day is the last 24 h, judged whole whenever the check runs
+    times, rows = parameter_rows(conn, now_s)
+    series = {name: daily_estimates(times, value, sd, end_s=now_s)
+              for name, (value, sd) in rows.items()}
     if max(t.size for t, _, _ in series.values()) < PARAMETER_MIN_DAYS:
         return None
     return series

@@ -7,32 +7,46 @@ heat-flux offsets in force at each step are those of the last on-line calibratio
 :func:`dsfd.estimation.solar_response.solar_response` gives the day's factor. A day is
 computed once it has ended and kept (:class:`SolarDays`); a restart computes the last
 month's days again from the store (about 0.15 s of CPU a day of one-minute cycles).
+
+:func:`by_daylight` tells a heat-transfer coefficient's parameter finding as the sun's when
+its change shows in the sunlit calibration windows alone, its direction from these days
+(docs/model.md#daylight-split).
 """
 
 from __future__ import annotations
 
 import math
 import sqlite3
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
 from dsfd.config.panel import PanelConfig
+from dsfd.estimation.daylight_split import (
+    HEAT_TRANSFER_NAMES,
+    as_solar_finding,
+    daylight_only,
+    daylight_split,
+    window_dark,
+)
 from dsfd.estimation.diagnostics import Finding
+from dsfd.estimation.parameter_shift import ParameterSettings
 from dsfd.estimation.parameter_watch import SECONDS_PER_DAY, day_start_s
 from dsfd.estimation.params import OFFSET_NAMES
 from dsfd.estimation.solar_response import (
     DailySolarResponse,
     SolarSettings,
+    factor_shift,
     solar_response,
     solar_response_change,
 )
 from dsfd.estimation.stepdata import step_data
 from dsfd.measured import MeasuredDataError
 from dsfd.storage.history import HistoryError, measured_from_history, read_history
-from dsfd.storage.parameter_series import offset_series
+from dsfd.storage.parameter_series import offset_series, parameter_rows
 
-__all__ = ["SOLAR_EVERY_S", "SolarDays", "solar_day_start_s"]
+__all__ = ["SOLAR_EVERY_S", "SolarDays", "by_daylight", "solar_day_start_s"]
 
 #: The solar detector runs every 6 h: a day is judged once it has ended, so a new day's
 #: value is judged within 6 h of the day's end (its days are solar days, not the check's).
@@ -97,3 +111,37 @@ class SolarDays:
         sources = np.asarray(steps.inputs.sources, float)[:, :4]
         return solar_response(t[use], q[row[use]], sources[use], row[use],
                               settings=self.settings)
+
+
+def by_daylight(conn: sqlite3.Connection, found: list[Finding], now_s: float, *,
+                panel: PanelConfig, solar_days: Callable[[], list[DailySolarResponse]]
+                ) -> list[Finding]:
+    """``found`` with each parameter finding of a heat-transfer coefficient whose change
+    shows in the sunlit windows alone told as a ``solar_gain_shift``
+    (:mod:`dsfd.estimation.daylight_split`, docs/model.md#daylight-split), after the other
+    findings (a ``solar_gain_shift`` of the solar detector itself comes first and counts).
+    ``solar_days`` gives the solar detector's daily factors (:meth:`SolarDays.days`), read
+    only when there is a finding to tell; without them a finding stays as it is."""
+    told = {id(f) for f in found if f.kind == "parameter_shift" and f.evidence
+            and f.evidence[0].signal.removeprefix("parameter:") in HEAT_TRANSFER_NAMES}
+    if not told:
+        return found
+    times, rows = parameter_rows(conn, now_s)
+    dark = window_dark(times, panel.calibration.window_h * 3600.0,
+                       latitude_deg=panel.site.latitude_deg,
+                       longitude_deg=panel.site.longitude_deg)
+    days = solar_days()
+    kept, as_solar = [], []
+    for f in found:
+        if id(f) not in told:
+            kept.append(f)
+            continue
+        value, sd = rows[f.evidence[0].signal.removeprefix("parameter:")]
+        split = daylight_split(times, value, sd, dark, since_s=f.start_s, end_s=now_s)
+        shift = factor_shift(days, since_s=f.start_s)
+        side = 1 if f.evidence[0].shift > 0 else -1
+        if shift is None or not daylight_only(split, side=side, k_sd=ParameterSettings().k_sd):
+            kept.append(f)
+        else:
+            as_solar.append(as_solar_finding(f, split, factor_shift=shift))
+    return kept + as_solar

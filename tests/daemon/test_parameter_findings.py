@@ -9,12 +9,16 @@ lacks its five days, or is not due, it ends none of its findings."""
 
 from __future__ import annotations
 
+import dataclasses
+import math
 import sqlite3
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from dsfd.config import load_panel
 from dsfd.daemon.findings import (
     PARAMETER_EVERY_S,
     PARAMETER_MIN_DAYS,
@@ -22,10 +26,15 @@ from dsfd.daemon.findings import (
     FindingsStage,
     detect,
 )
+from dsfd.estimation.daylight_split import window_dark
 from dsfd.estimation.diagnostics import Evidence, Finding
 from dsfd.estimation.lifecycle import Changes
+from dsfd.estimation.solar_response import DIRT_OR_LOUVER, DailySolarResponse
+from dsfd.report.finding_figures import evidence_figure
 from dsfd.storage import findings as table
+from dsfd.storage.solar_series import SolarDays, by_daylight
 from dsfd.storage.timeseries import CycleRecord, Store
+from tests.conftest import PANELS
 
 DAY = 86400.0
 MIDNIGHT = 19675 * DAY  # 2023-11-14 00:00 UTC
@@ -35,6 +44,7 @@ DEFAULTS = {"h_out": 12.0, "h_ca1": 3.5, "h_ca2": 4.0, "h_ca3": 3.5, "h_ca4": 4.
 SIGMA = {"h_out": 0.08, "h_ca1": 0.06, "h_ca2": 0.1, "h_ca3": 0.06, "h_ca4": 0.05,
          "h_in": 0.08, "f": 0.15, "c": 0.2, "n": 0.03}
 HISTORY_DAYS = 21
+PANEL = load_panel(PANELS / "suwon-south.yaml")
 OFFSETS = ("q_x1", "q_x2", "q_x3", "q_x4")
 SHIFT_AT = MIDNIGHT + 14 * DAY + 6 * 3600.0  # 06:00 on the 15th day
 #: The tests check every 6 h unless they say otherwise (every hour, the detector's own
@@ -49,14 +59,16 @@ def _decision(cycle: int, t: float) -> dict[str, object]:
 
 def _parameter_history(tmp_path: Path, *, seed: int = 0, shift: dict[str, float] | None = None,
                        sd_scale: float = 1.0, restart_at: float | None = None,
-                       shift_at: float = SHIFT_AT) -> Path:
+                       shift_at: float = SHIFT_AT,
+                       shift_where: Callable[[np.ndarray], np.ndarray] | None = None) -> Path:
     """Three weeks of hourly on-line estimates written by the daemon's Store, from noon of
     the first day (a partial day): each parameter wanders from day to day uniformly within
     ± its posterior sd (a clean façade), has a daily cycle of one sd (what a lumped model's
     4-h windows make of the sun) and correlated hour-to-hour noise (AR(1), φ 0.8, half an
     sd); ``shift`` adds ln-factors (or to n) from :data:`SHIFT_AT` on. The stored sds are
     the posterior sds ×U(0.8, 1.25), × ``sd_scale``. ``restart_at``: the calibration
-    starts again from its priors there (a ``prior`` row)."""
+    starts again from its priors there (a ``prior`` row). ``shift_where``: the estimate
+    times (of the θ parameters) the shift applies at (default all)."""
     rng = np.random.default_rng(seed)
     store = Store.open(tmp_path)
     store.begin_run(panel="p", mode="test", version="0", config_path=None)
@@ -69,7 +81,8 @@ def _parameter_history(tmp_path: Path, *, seed: int = 0, shift: dict[str, float]
             ar[i] = 0.8 * ar[i - 1] + rng.normal(0.0, 0.5 * sigma * np.sqrt(1 - 0.64))
         z[name] = (rng.uniform(-1.0, 1.0, HISTORY_DAYS)[day] * sigma + ar
                    + sigma * np.sin(2 * np.pi * t / DAY)
-                   + np.where(t >= shift_at, (shift or {}).get(name, 0.0), 0.0))
+                   + np.where((t >= shift_at) & (True if shift_where is None else shift_where(t)),
+                              (shift or {}).get(name, 0.0), 0.0))
     prior_sd = {name: 0.15 if name == "n" else 0.7 for name in SIGMA}
     q_wander = {q: rng.uniform(-1.0, 1.0, HISTORY_DAYS)[day] + rng.normal(0.0, 0.5, t.size)
                 for q in OFFSETS}
@@ -238,3 +251,111 @@ def test_the_parameter_detector_not_run_ends_none_of_its_findings(tmp_path):
         assert stage.check(conn, later + PARAMETER_EVERY_S + DAY).ended == [again]
     finally:
         conn.close()
+
+
+def _sunlit(t: np.ndarray) -> np.ndarray:
+    return ~window_dark(t, PANEL.calibration.window_h * 3600.0,
+                        latitude_deg=PANEL.site.latitude_deg,
+                        longitude_deg=PANEL.site.longitude_deg)
+
+
+def _solar_days(after: float) -> list[DailySolarResponse]:
+    """The solar detector's daily factor: −0.03 every day, ``after`` from the shift on."""
+    return [DailySolarResponse(time_s=MIDNIGHT + (d + 0.5) * DAY,
+                               factor=after if MIDNIGHT + d * DAY >= SHIFT_AT - DAY else -0.03,
+                               sd=0.01, node_factors=(math.nan,) * 4, sunny_steps=300)
+            for d in range(HISTORY_DAYS)]
+
+
+@pytest.mark.parametrize(("where", "told"), [(_sunlit, True), (None, False)])
+def test_a_coefficient_moved_in_the_sunlit_windows_alone_is_told_as_a_change_of_the_sun(
+        tmp_path, where, told):
+    """The glass unit's h_ca4 ×2 from day 15 in the estimates whose 4-h window saw the sun
+    (what dirt did to it on the diagnostics bench), the solar detector's daily factor down
+    by 0.04 on the same days: the parameter finding is told as a solar_gain_shift of the
+    exterior glass or the louver, with both halves as evidence. The same rise day and night
+    (a failed edge seal) stays the glass unit's parameter_shift."""
+    db = _parameter_history(tmp_path, shift={"h_ca4": math.log(2.0)}, shift_where=where)
+    now = SHIFT_AT + 2 * DAY
+    conn = sqlite3.connect(db)
+    try:
+        found, _ = detect(conn, now)
+        assert [f.evidence[0].signal for f in found] == ["parameter:h_ca4"]
+        out = by_daylight(conn, found, now, panel=PANEL, solar_days=lambda: _solar_days(-0.07))
+        untold = by_daylight(conn, found, now, panel=PANEL, solar_days=list)
+    finally:
+        conn.close()
+    (f,) = out
+    assert untold == found  # no solar days: nothing says which way the sun went
+    if not told:
+        assert f == found[0]
+        return
+    assert (f.kind, f.subject) == ("solar_gain_shift", DIRT_OR_LOUVER)
+    head, dark, lit = f.evidence
+    assert head == found[0].evidence[0] and dark.signal.endswith(":dark")
+    assert abs(dark.shift) < 0.15 and lit.shift == pytest.approx(math.log(2.0), abs=0.25)
+    assert "less of the sun" in f.action and "clean it" in f.action
+
+
+def test_the_report_draws_a_coefficient_told_as_the_suns_by_night_and_in_the_sun(tmp_path):
+    """The stored finding's figure is the coefficient's estimates apart for the dark and the
+    sunlit windows (not the solar detector's daily share, which did not move enough): two
+    series of daily values, the sunlit one about twice the dark one after the start."""
+    db = _parameter_history(tmp_path, shift={"h_ca4": math.log(2.0)}, shift_where=_sunlit)
+    now = SHIFT_AT + 2 * DAY
+    conn = sqlite3.connect(db)
+    try:
+        found, _ = detect(conn, now)
+        told = by_daylight(conn, found, now, panel=PANEL, solar_days=lambda: _solar_days(-0.07))
+        table.apply(conn, Changes(opened=told), now_s=now, run_id=1)
+        (row,) = table.findings_between(conn, now - DAY, now)
+        fig = evidence_figure(conn, row, offset_h=9.0, config=dataclasses.asdict(PANEL))
+    finally:
+        conn.close()
+    assert not isinstance(fig, str), fig
+    assert "by night and in the sun" in fig.texts[0].get_text()
+    ax = fig.axes[0]
+    series = {c.get_label(): c for c in ax.containers}
+    dark = next(c for label, c in series.items() if label.startswith("night windows"))
+    lit = next(c for label, c in series.items() if label.startswith("sunlit windows"))
+    y_dark, y_lit = (c.lines[0].get_data()[1] for c in (dark, lit))
+    assert np.median(y_lit[-2:]) / np.median(y_dark[-2:]) == pytest.approx(2.0, rel=0.3)
+    assert np.median(y_lit[:5]) / np.median(y_dark[:5]) == pytest.approx(1.0, rel=0.3)
+
+
+class _KnownSolarDays(SolarDays):
+    """The solar detector's days as :func:`_solar_days` gives them (the synthetic store
+    holds no weather to compute them from), each too uncertain (sd 0.05) for a finding of
+    the solar detector's own."""
+
+    def days(self, conn: sqlite3.Connection, now_s: float) -> list[DailySolarResponse]:
+        return [dataclasses.replace(d, sd=0.05) for d in _solar_days(-0.07)
+                if d.time_s < now_s]
+
+
+def test_a_coefficient_told_as_the_suns_stays_one_finding_when_the_detectors_run_apart(
+        tmp_path):
+    """The told finding comes from the parameter detector (hourly) while its kind is judged
+    by the solar detector (every 6 h): a check where the solar detector runs alone keeps it,
+    so it opens once and stays open (it ended and opened again every day or so on the
+    diagnostics bench's soiled façade before)."""
+    db = _parameter_history(tmp_path, shift={"h_ca4": math.log(2.0)}, shift_where=_sunlit)
+    stage = FindingsStage(db, run_id=lambda: 1, panel=PANEL)
+    stage.solar = _KnownSolarDays(PANEL, tmp_path)
+    start = SHIFT_AT + DAY
+    stage._ran_s["solar"] = start - 5.5 * 3600.0  # due half an hour off the parameters' hour
+    conn = sqlite3.connect(db)
+    try:
+        changes = [stage.check(conn, now) for now in np.arange(start, start + 3 * DAY, 1800.0)]
+    finally:
+        conn.close()
+    opened = [f for c in changes for f in c.opened if f.kind == "solar_gain_shift"]
+    assert len(opened) == 1 and opened[0].subject == DIRT_OR_LOUVER
+    ended = [fid for c in changes for fid in c.ended]
+    conn = sqlite3.connect(db)
+    try:
+        solar_ids = {r["finding_id"] for r in table.findings_between(conn, 0.0, start + 3 * DAY)
+                     if r["kind"] == "solar_gain_shift"}
+    finally:
+        conn.close()
+    assert not solar_ids & set(ended)
