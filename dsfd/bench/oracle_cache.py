@@ -30,7 +30,7 @@ __all__ = ["NOT_READ_BY_ORACLE", "ORACLE_VERSION", "OracleCache", "config_digest
 
 #: Version of what the plant oracle's result depends on in code (the truth plant, the plant
 #: oracle, the closed-loop set-up). Entries of another version are ignored.
-ORACLE_VERSION = "2026-11-29 speed-dependent slat film (issue 35)"
+ORACLE_VERSION = "2026-11-29 plant oracle within the comfort limits (issue 35)"
 
 
 #: Sections of the panel configuration left out of the digest. The plant oracle plans with

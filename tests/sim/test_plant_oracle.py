@@ -51,13 +51,19 @@ def _problem(cfg, plant: Plant, theta: np.ndarray) -> ControlProblem:
         previous_phi_deg=cmd.phi_deg, previous_afr=cmd.afr, previous_or_pct=cmd.or_pct)
 
 
-@pytest.fixture(scope="module")
-def decisions(suwon, rmis_raw, rmis):
+def _clear_winter_morning(suwon, rmis_raw, rmis):
+    """The panel (a short horizon, heating) and its plant at 09:30 of a clear winter day."""
     cfg = dataclasses.replace(suwon, control=dataclasses.replace(
         suwon.control, horizon_steps=HORIZON, mode="heating"))
     plant = Plant(cfg, seed=2, weather_series=rmis_raw)
     plant.reset(day_start(rmis, 1) + 7.0 * HOUR, command=Command(0.0, 1, 100.0))
     plant.advance(2.5 * HOUR)  # a clear winter morning at the Suwon panel
+    return cfg, plant
+
+
+@pytest.fixture(scope="module")
+def decisions(suwon, rmis_raw, rmis):
+    cfg, plant = _clear_winter_morning(suwon, rmis_raw, rmis)
     oracle = PlantOracle(cfg)
     mpc = MpcOptimiser(cfg)
     default_theta = mpc.model.default_theta()
@@ -198,3 +204,41 @@ def test_bench_closed_loop_names_an_unknown_controller_and_runs_nothing(tmp_path
     assert proc.returncode == 2
     assert "unknown controller(s) ['mcp']" in proc.stderr and "plant-oracle" in proc.stderr
     assert not out.exists()
+
+
+@pytest.fixture(scope="module")
+def occupied_decisions(suwon, rmis_raw, rmis):
+    """Three decisions of a clear winter morning with the room occupied over the horizon."""
+    cfg, plant = _clear_winter_morning(suwon, rmis_raw, rmis)
+    oracle = PlantOracle(cfg)
+    mpc = MpcOptimiser(cfg)
+    out = []
+    for _ in range(3):
+        problem = dataclasses.replace(_problem(cfg, plant, plant.params.lumped_theta(cfg)),
+                                      occupied=np.ones(HORIZON, bool))
+        d = mpc.decide(problem)
+        mpc_cmd = Candidate.of(d.phi_deg, oracle._representative(d.afr), d.or_pct)
+        choice = oracle.decide(plant, problem, current=None, extra=[mpc_cmd])
+        out.append((problem, choice, list(oracle.last_costs), dict(oracle.last_allowed),
+                    mpc_cmd))
+        plant.apply(Command(choice.phi_deg, choice.afr, choice.or_pct))
+        plant.advance(1200.0)
+    return oracle, out
+
+
+def test_plant_oracle_keeps_to_the_comfort_limits_mpc_keeps_to(occupied_decisions):
+    """While the room is occupied the oracle takes the cheapest candidate on the plant among
+    those the comfort limits allow (judged as mpc judges its own), never a cheaper one they
+    bar; the low winter sun bars some (the test is not vacuous); mpc's own command is allowed
+    and costs the oracle's choice no less."""
+    _, out = occupied_decisions
+    barred_any = False
+    for _, choice, costs, allowed, mpc_cmd in out:
+        won = Candidate.of(choice.phi_deg, choice.afr, choice.or_pct)
+        assert allowed[won]
+        by_j = {pc.candidate: pc.j for pc in costs if not pc.failure}
+        assert choice.cost_j == min(j for c, j in by_j.items() if allowed[c])
+        barred_any |= any(not ok and by_j[c] < choice.cost_j for c, ok in allowed.items())
+        if allowed.get(mpc_cmd):
+            assert choice.cost_j <= by_j[mpc_cmd] + 1e-6
+    assert barred_any
