@@ -188,8 +188,7 @@ def solar_response_change(days: list[DailySolarResponse], *,
                    threshold=st.days.h_sd)]
     nodes = np.array([d.node_factors for d in days])
     g = st.days
-    before = ((t >= t[cs.start] - (g.guard_days + g.reference_days) * SECONDS_PER_DAY)
-              & (t < t[cs.start] - g.guard_days * SECONDS_PER_DAY))
+    before = _reference_days(t, float(t[cs.start]), g)
     node_shift = {}
     for i in (0, 3):
         if not (np.isfinite(nodes[after, i]).any() and np.isfinite(nodes[before, i]).any()):
@@ -246,12 +245,17 @@ def factor_shift(days: list[DailySolarResponse], *, since_s: float,
     """The daily factor b's mean over the days from ``since_s`` minus its mean over the
     reference days before them (the detector's guard and reference spans), or None when
     either has no day: the direction of a change found elsewhere (< 0: less sun taken)."""
-    g = (settings or SolarSettings()).days
     t = np.array([d.time_s for d in days], float)
     b = np.array([d.factor for d in days], float)
     after = t >= since_s
-    before = ((t >= since_s - (g.guard_days + g.reference_days) * SECONDS_PER_DAY)
-              & (t < since_s - g.guard_days * SECONDS_PER_DAY))
+    before = _reference_days(t, since_s, (settings or SolarSettings()).days)
     if not (after.any() and before.any()):
         return None
     return float(np.mean(b[after]) - np.mean(b[before]))
+
+
+def _reference_days(t: np.ndarray, since_s: float, g: ParameterSettings) -> np.ndarray:
+    """The days ``t`` [s] of the reference a change from ``since_s`` is measured against:
+    the ``g.reference_days`` ending ``g.guard_days`` before it."""
+    return ((t >= since_s - (g.guard_days + g.reference_days) * SECONDS_PER_DAY)
+            & (t < since_s - g.guard_days * SECONDS_PER_DAY))

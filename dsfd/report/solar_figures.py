@@ -21,6 +21,7 @@ from dsfd.estimation.daylight_split import MIN_HALF_SPAN_S, window_dark
 from dsfd.estimation.parameter_watch import daily_estimates
 from dsfd.report.figure_axes import FindingAxes, NoEvidence, end_s
 from dsfd.report.plotting import OUTSIDE, WIDTH_IN
+from dsfd.storage.findings import first_signal
 from dsfd.storage.parameter_series import parameter_rows
 
 __all__ = ["daylight_figure", "solar_figure"]
@@ -81,7 +82,7 @@ def daylight_figure(conn: sqlite3.Connection, row: Mapping[str, Any], offset_h: 
     """A heat-transfer coefficient's on-line estimates and daily values from the windows
     that were all night and from those with sun, each with its level before the start."""
     panel = _panel(config)
-    name = str(row["evidence"][0]["signal"]).removeprefix("parameter:")
+    name = first_signal(row).removeprefix("parameter:")
     end = end_s(row)
     times, rows = parameter_rows(conn, end)
     if name not in rows or not times.size:
