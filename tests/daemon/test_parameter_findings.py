@@ -359,3 +359,29 @@ def test_a_coefficient_told_as_the_suns_stays_one_finding_when_the_detectors_run
     finally:
         conn.close()
     assert not solar_ids & set(ended)
+
+
+class _BrokenSolarDays(SolarDays):
+    """A store the solar days cannot be read from (a corrupt history, say)."""
+
+    def days(self, conn: sqlite3.Connection, now_s: float) -> list[DailySolarResponse]:
+        raise sqlite3.DatabaseError("database disk image is malformed")
+
+
+def test_a_failing_daylight_split_is_counted_and_leaves_the_parameter_finding_as_found(
+        tmp_path):
+    """The split needs the solar days; when they cannot be read the check goes on, the
+    failure is counted, and the coefficient's finding opens as the parameter detector told it."""
+    db = _parameter_history(tmp_path, shift={"h_ca4": math.log(2.0)}, shift_where=_sunlit)
+    stage = FindingsStage(db, run_id=lambda: 1, panel=PANEL)
+    stage.solar = _BrokenSolarDays(PANEL, tmp_path)
+    now = SHIFT_AT + 2 * DAY
+    stage._ran_s["solar"] = now  # the solar detector itself is not due: only the split fails
+    conn = sqlite3.connect(db)
+    try:
+        changes = stage.check(conn, now)
+    finally:
+        conn.close()
+    assert stage.failures == 1
+    assert [(f.kind, f.evidence[0].signal) for f in changes.opened] == [
+        ("parameter_shift", "parameter:h_ca4")]
