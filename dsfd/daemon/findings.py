@@ -358,8 +358,6 @@ class FindingsStage:
                                night=self.night if "night" in due else None,
                                parameters="parameter" in due,
                                night_offsets=self.night if "night_offset" in due else None)
-        if self.stakes is not None:
-            found = self.stakes.apply(conn, found, now_s)
         if self.solar is not None and "solar" in due:
             self._ran_s["solar"] = now_s  # a failure is tried again at its cadence, not at once
             try:
@@ -372,6 +370,8 @@ class FindingsStage:
                 judged.add("solar_gain_shift")
         if self.solar is not None:
             found = self._by_daylight(conn, found, judged, now_s)
+        if self.stakes is not None:  # after the split: a told finding keeps its stake
+            found = self.stakes.apply(conn, found, now_s)
         for name, kind in (("residual", "residual_shift"), ("night", "pane_offset_shift"),
                            ("parameter", "parameter_shift"),
                            ("night_offset", "night_offset_shift")):

@@ -3,7 +3,8 @@
 
 A ``parameter_shift`` finding of a θ parameter says that one heat or air path of the façade
 moved; this adds what the move costs (a heat-flux offset's finding names a sensor first, and a
-sensor reading off changes no heat path, so it gets none):
+sensor reading off changes no heat path, so it gets none; one the daylight split told as the
+sun's is still that coefficient's move, and gets its stake):
 :func:`dsfd.control.stake.energy_at_stake` over the last :data:`STAKE_WINDOW_S` of stored
 cycles (the weather readings and the commands applied, read as ``dsfd export`` reads them),
 with θ now against θ now with that one parameter at its value before the
@@ -30,6 +31,7 @@ import numpy as np
 
 from dsfd.config.panel import PanelConfig
 from dsfd.control.stake import EnergyAtStake, energy_at_stake
+from dsfd.estimation.daylight_split import told_by_daylight
 from dsfd.estimation.diagnostics import Evidence, Finding
 from dsfd.estimation.lifecycle import key_of
 from dsfd.estimation.params import FIT_NAMES, OFFSET_NAMES
@@ -80,9 +82,14 @@ def stake_record(panel: PanelConfig, state_dir: Path, now_s: float) -> StepData 
 
 def costed(f: Finding) -> bool:
     """Whether ``f`` gets an energy at stake: a ``parameter_shift`` of a θ parameter (not of
-    a heat-flux offset, whose action names a sensor first)."""
-    name = f.evidence[0].signal.removeprefix("parameter:") if f.evidence else ""
-    return f.kind == "parameter_shift" and name in FIT_NAMES and name not in OFFSET_NAMES
+    a heat-flux offset, whose action names a sensor first), or such a finding the daylight
+    split told as the sun's (docs/model.md#daylight-split): its parameter moved alike."""
+    if not f.evidence:
+        return False
+    signal = f.evidence[0].signal
+    name = signal.removeprefix("parameter:")
+    return ((f.kind == "parameter_shift" or told_by_daylight(f.kind, signal))
+            and name in FIT_NAMES and name not in OFFSET_NAMES)
 
 
 def _stake(conn: sqlite3.Connection, f: Finding, now_s: float, panel: PanelConfig,

@@ -385,3 +385,36 @@ def test_a_failing_daylight_split_is_counted_and_leaves_the_parameter_finding_as
     assert stage.failures == 1
     assert [(f.kind, f.evidence[0].signal) for f in changes.opened] == [
         ("parameter_shift", "parameter:h_ca4")]
+
+
+def test_a_coefficient_told_as_the_suns_keeps_the_energy_at_stake_of_its_move(
+        tmp_path, monkeypatch):
+    """The told finding is still the coefficient's move, so the stake the daemon costs for
+    it (dsfd.daemon.stake; its figures are tested against dsfd export in test_run_summary,
+    and replaced by a fixed one here: the synthetic store holds no week of cycles) ends its
+    action and its evidence, after the two halves."""
+    import dsfd.daemon.stake as stake
+
+    def fixed_stake(conn, f, now_s, *, panel, steps):
+        ev = Evidence(signal=stake.STAKE_SIGNAL, shift=1.25, shift_sd=math.nan,
+                      unit="kWh/week", since_s=now_s, statistic=math.nan, threshold=math.nan)
+        return dataclasses.replace(f, evidence=(*f.evidence, ev),
+                                   action=f.action + "; costs 1.25 kWh a week")
+
+    monkeypatch.setattr(stake, "stake_record", lambda panel, state_dir, now_s: "week")
+    monkeypatch.setattr(stake, "with_stake", fixed_stake)
+    db = _parameter_history(tmp_path, shift={"h_ca4": math.log(2.0)}, shift_where=_sunlit)
+    stage = FindingsStage(db, run_id=lambda: 1, panel=PANEL)
+    stage.solar = _KnownSolarDays(PANEL, tmp_path)
+    now = SHIFT_AT + 2 * DAY
+    conn = sqlite3.connect(db)
+    try:
+        (f,) = stage.check(conn, now).opened
+    finally:
+        conn.close()
+    assert (f.kind, f.subject) == ("solar_gain_shift", DIRT_OR_LOUVER)
+    assert [e.signal for e in f.evidence] == [
+        "parameter:h_ca4", "parameter:h_ca4:dark", "parameter:h_ca4:sunlit",
+        stake.STAKE_SIGNAL]
+    assert "less of the sun" in f.action and f.action.endswith("; costs 1.25 kWh a week")
+    assert stage.stakes.costings == 1
