@@ -20,9 +20,10 @@ from dsfd.control.objective import J_PER_WH, is_heating
 from dsfd.estimation.observer import initial_state
 from dsfd.estimation.params import N_PARAMS, full_vector, with_offsets
 from dsfd.estimation.stepdata import StepData
+from dsfd.physics.coupling import StepInputs
 from dsfd.physics.model import LumpedModel
 
-__all__ = ["EnergyAtStake", "energy_at_stake"]
+__all__ = ["EnergyAtStake", "energy_at_stake", "solar_energy_at_stake"]
 
 SECONDS_PER_WEEK = 7 * 86400.0
 J_PER_KWH = 1000.0 * J_PER_WH
@@ -77,13 +78,45 @@ def energy_at_stake(model: LumpedModel, steps: StepData, theta_before: np.ndarra
     The season of each step is that of the controller (:func:`is_heating` on the step's
     outdoor air), so a record that crosses the auto threshold is costed as it was controlled.
     """
-    theta = full_vector(np.vstack([np.atleast_2d(theta_before), np.atleast_2d(theta_now)]))
+    theta = np.vstack([np.atleast_2d(theta_before), np.atleast_2d(theta_now)])
+    return _costed(model, steps, theta, np.ones(2))
+
+
+def solar_energy_at_stake(model: LumpedModel, steps: StepData, theta: np.ndarray,
+                          share_change: float) -> EnergyAtStake:
+    """What a change of the share of the computed sun the façade takes costs: ``steps``
+    simulated with ``theta`` (which took the change up as it came, docs/model.md#diagnostics-solar)
+    and the sun as the model computes it, against the same with the sun the change took
+    given back.
+
+    Parameters
+    ----------
+    model, steps
+        As :func:`energy_at_stake`.
+    theta : array (9,) or (13,)
+        θ now, optionally with its heat-flux offsets.
+    share_change : float, [-]
+        The change of the share of the computed sun the façade takes (the solar detector's
+        b, −0.1: a tenth less). "Before" scales every solar term the façade takes — what the
+        panes and the slats absorb, what reaches the room, and the daylight benefit, all
+        behind the same exterior glass — by (1 − ``share_change``).
+    """
+    theta = np.vstack([np.atleast_2d(theta)] * 2)
+    return _costed(model, steps, theta, np.array([1.0 - share_change, 1.0]))
+
+
+def _costed(model: LumpedModel, steps: StepData, theta: np.ndarray, sun: np.ndarray
+            ) -> EnergyAtStake:
+    """J of the record for the pair ``theta`` (2, 9 or 13) with the solar terms of each
+    scaled by ``sun`` (2,): "before" first, "now" second."""
+    theta = full_vector(theta)
     cost_j = np.zeros(2)
     simulated = 0
     for a, b in _segments(np.asarray(steps.valid, bool)):
         part = steps.window(a, b)
         x0 = initial_state(model, part, 0, theta)
-        inp = with_offsets(part.inputs, theta[:, None, N_PARAMS:])
+        inp = _sun_scaled(part.inputs, sun)
+        inp = with_offsets(inp, theta[:, None, N_PARAMS:])
         traj = model.rollout(x0, np.broadcast_to(part.regime, (2, b - a)),
                              np.broadcast_to(part.or_, (2, b - a)), inp,
                              theta[:, None, :N_PARAMS])
@@ -98,3 +131,13 @@ def energy_at_stake(model: LumpedModel, steps: StepData, theta_before: np.ndarra
     per_week = (j_kwh[1] - j_kwh[0]) * SECONDS_PER_WEEK / seconds if seconds > 0 else np.nan
     return EnergyAtStake(j_before_kwh=float(j_kwh[0]), j_now_kwh=float(j_kwh[1]),
                          days=seconds / 86400.0, per_week_kwh=float(per_week))
+
+
+def _sun_scaled(inputs: StepInputs, sun: np.ndarray) -> StepInputs:
+    """``inputs`` with a batch axis of ``sun``'s length, the solar terms scaled by it."""
+    if np.all(sun == 1.0):
+        return inputs
+    k = sun[:, None]
+    return inputs._replace(sources=np.asarray(inputs.sources)[None] * k[..., None],
+                           q_trans_wm2=np.asarray(inputs.q_trans_wm2)[None] * k,
+                           q_da_w=np.asarray(inputs.q_da_w)[None] * k)

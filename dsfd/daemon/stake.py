@@ -1,22 +1,24 @@
-"""The energy at stake of a parameter finding, from what the daemon stored
+"""The energy at stake of a parameter or solar finding, from what the daemon stored
 (docs/model.md#energy-at-stake).
 
 A ``parameter_shift`` finding of a θ parameter says that one heat or air path of the façade
 moved; this adds what the move costs (a heat-flux offset's finding names a sensor first, and a
-sensor reading off changes no heat path, so it gets none; one the daylight split told as the
-sun's is still that coefficient's move, and gets its stake):
+sensor reading off changes no heat path, so it gets none):
 :func:`dsfd.control.stake.energy_at_stake` over the last :data:`STAKE_WINDOW_S` of stored
 cycles (the weather readings and the commands applied, read as ``dsfd export`` reads them),
 with θ now against θ now with that one parameter at its value before the
-change. The result joins the finding as one more piece of evidence (signal
-``energy_at_stake``, kWh per week) and a sentence of its action.
+change. A ``solar_gain_shift`` (dirt, or slats off their read-back) moves no parameter of θ
+but the share of the computed sun the façade takes: it is costed with
+:func:`dsfd.control.stake.solar_energy_at_stake`, θ now with the sun as computed against the
+same with the share it lost given back. The result joins the finding as one more piece of
+evidence (signal ``energy_at_stake``, kWh per week) and a sentence of its action.
 
 Runs in the findings thread (a week of one-minute cycles: about 0.4–1 s to read, 6–8 s of
-CPU to simulate twice per finding), only when the parameter detector reports a finding; the
-week is read once per check however many parameters moved. The detector reports an open
-finding again at every run (hourly), so :class:`StakeCache` costs a finding when it is first
-reported and then every :data:`STAKE_EVERY_S`, and lends the last figure to the checks
-between.
+CPU to simulate twice per finding), only when a detector reports a costed finding; the
+week is read once per check however many there are. The detectors report an open finding
+again at every run (hourly, the solar detector every 6 h), so :class:`StakeCache` costs a
+finding when it is first reported and then every :data:`STAKE_EVERY_S`, and lends the last
+figure to the checks between.
 """
 
 from __future__ import annotations
@@ -30,11 +32,11 @@ from pathlib import Path
 import numpy as np
 
 from dsfd.config.panel import PanelConfig
-from dsfd.control.stake import EnergyAtStake, energy_at_stake
-from dsfd.estimation.daylight_split import told_by_daylight
+from dsfd.control.stake import EnergyAtStake, energy_at_stake, solar_energy_at_stake
 from dsfd.estimation.diagnostics import Evidence, Finding
 from dsfd.estimation.lifecycle import key_of
 from dsfd.estimation.params import FIT_NAMES, OFFSET_NAMES
+from dsfd.estimation.solar_response import SOLAR_SIGNAL
 from dsfd.estimation.stepdata import StepData, model_config, step_data
 from dsfd.measured import MeasuredDataError
 from dsfd.physics.model import LumpedModel
@@ -82,26 +84,38 @@ def stake_record(panel: PanelConfig, state_dir: Path, now_s: float) -> StepData 
 
 def costed(f: Finding) -> bool:
     """Whether ``f`` gets an energy at stake: a ``parameter_shift`` of a θ parameter (not of
-    a heat-flux offset, whose action names a sensor first), or such a finding the daylight
-    split told as the sun's (docs/model.md#daylight-split): its parameter moved alike."""
-    if not f.evidence:
-        return False
-    signal = f.evidence[0].signal
-    name = signal.removeprefix("parameter:")
-    return ((f.kind == "parameter_shift" or told_by_daylight(f.kind, signal))
-            and name in FIT_NAMES and name not in OFFSET_NAMES)
+    a heat-flux offset, whose action names a sensor first), or a ``solar_gain_shift`` that
+    says by how much the share of the sun changed (the solar detector's, or a coefficient's
+    change the daylight split told as the sun's, docs/model.md#daylight-split)."""
+    if f.kind == "solar_gain_shift":
+        return _solar_share(f) is not None
+    name = f.evidence[0].signal.removeprefix("parameter:") if f.evidence else ""
+    return f.kind == "parameter_shift" and name in FIT_NAMES and name not in OFFSET_NAMES
+
+
+def _solar_share(f: Finding) -> float | None:
+    """The change of the share of the computed sun a solar finding gives (its
+    ``solar_response`` evidence), or None."""
+    shares = [e.shift for e in f.evidence if e.signal == SOLAR_SIGNAL and math.isfinite(e.shift)]
+    return shares[0] if shares else None
 
 
 def _stake(conn: sqlite3.Connection, f: Finding, now_s: float, panel: PanelConfig,
            steps: StepData) -> EnergyAtStake | None:
-    name = f.evidence[0].signal.removeprefix("parameter:")
-    now, before = theta_at(conn, now_s), theta_at(conn, f.start_s, before=True)
-    if now is None or before is None or not costed(f):
+    if not costed(f):
+        return None
+    now = theta_at(conn, now_s)
+    model = LumpedModel(model_config(panel, steps.step_s))
+    share = _solar_share(f) if f.kind == "solar_gain_shift" else None
+    if share is not None:
+        return None if now is None else solar_energy_at_stake(model, steps, now, share)
+    before = theta_at(conn, f.start_s, before=True)
+    if now is None or before is None:
         return None
     changed = now.copy()
-    i = FIT_NAMES.index(name)
+    i = FIT_NAMES.index(f.evidence[0].signal.removeprefix("parameter:"))
     changed[i] = before[i]  # only this parameter's move is costed
-    return energy_at_stake(LumpedModel(model_config(panel, steps.step_s)), steps, changed, now)
+    return energy_at_stake(model, steps, changed, now)
 
 
 def with_stake(conn: sqlite3.Connection, f: Finding, now_s: float, *, panel: PanelConfig,

@@ -26,7 +26,7 @@ import numpy as np
 from dsfd.estimation.diagnostics import Evidence, Finding
 from dsfd.estimation.parameter_shift import ParameterSettings, standardised_days
 from dsfd.estimation.parameter_watch import daily_estimates
-from dsfd.estimation.solar_response import solar_action, solar_cause
+from dsfd.estimation.solar_response import SOLAR_SIGNAL, solar_action, solar_cause
 from dsfd.physics.solar.position import solar_position
 
 __all__ = ["HEAT_TRANSFER_NAMES", "MIN_HALF_SPAN_S", "DaylightSplit", "as_solar_finding",
@@ -122,9 +122,9 @@ def daylight_only(split: DaylightSplit, *, side: int, k_sd: float) -> bool:
 
 def as_solar_finding(f: Finding, split: DaylightSplit, *, factor_shift: float) -> Finding:
     """A parameter finding of a heat-transfer coefficient whose change is the sun's, told as
-    a ``solar_gain_shift``: its evidence first (the parameter; its energy at stake stays), then
-    the two halves; the subject and action from the solar detector's daily factor's change
-    ``factor_shift`` over the same days (< 0: less sun taken)."""
+    a ``solar_gain_shift``: its evidence first (the parameter), then the two halves and the
+    solar detector's daily factor's change ``factor_shift`` over the same days (< 0: less
+    sun taken, signal ``solar_response``), from which the subject and the action follow."""
     head = f.evidence[0]
     name = head.signal.removeprefix("parameter:")
     halves = tuple(Evidence(signal=f"{head.signal}:{half}", shift=shift, shift_sd=z,
@@ -132,12 +132,14 @@ def as_solar_finding(f: Finding, split: DaylightSplit, *, factor_shift: float) -
                             threshold=math.nan)
                    for half, shift, z in (("dark", split.dark_shift, split.dark_z),
                                           ("sunlit", split.lit_shift, split.lit_z)))
+    solar = Evidence(signal=SOLAR_SIGNAL, shift=factor_shift, shift_sd=math.nan, unit="1",
+                     since_s=head.since_s, statistic=math.nan, threshold=math.nan)
     cause = solar_cause(factor_shift, pane_shift=None, slat_shift=None)
     why = (f"{name} moved ×{math.exp(split.lit_shift):.2f} in the hours with sun and "
            f"×{math.exp(split.dark_shift):.2f} at night, which no change of air or glass "
            "does")
     return replace(f, kind="solar_gain_shift", subject=cause,
-                   evidence=(head, *halves, *f.evidence[1:]),
+                   evidence=(head, *halves, solar, *f.evidence[1:]),
                    action=f"{why}: {solar_action(factor_shift, cause)}")
 
 

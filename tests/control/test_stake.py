@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from dsfd.control.objective import is_heating
-from dsfd.control.stake import energy_at_stake
+from dsfd.control.stake import energy_at_stake, solar_energy_at_stake
 from dsfd.estimation.observer import initial_state
 from dsfd.estimation.params import PARAMETER_NAMES
 from dsfd.estimation.stepdata import StepData, model_config, step_data
@@ -88,3 +88,45 @@ def test_j_matches_the_paper_objective_stepped_by_hand_across_a_gap(suwon):
     simulated_s = (steps.n_steps - 1) * steps.step_s
     assert s.per_week_kwh == pytest.approx(
         (s.j_now_kwh - s.j_before_kwh) * 7 * 86400.0 / simulated_s)
+
+
+def _sun_times(steps: StepData, k: float) -> StepData:
+    """The record with every solar term of the façade scaled by ``k`` (what dirt does)."""
+    inp = steps.inputs
+    return dataclasses.replace(steps, inputs=inp._replace(
+        sources=np.asarray(inp.sources) * k, q_trans_wm2=np.asarray(inp.q_trans_wm2) * k,
+        q_da_w=np.asarray(inp.q_da_w) * k))
+
+
+def test_no_change_of_the_sun_puts_nothing_at_stake(suwon):
+    theta = true_theta(suwon)
+    model, steps = _record(suwon, theta)
+    s = solar_energy_at_stake(model, steps, theta, 0.0)
+    assert s.j_now_kwh == s.j_before_kwh and s.per_week_kwh == 0.0
+
+
+def test_the_sun_given_back_is_the_record_stepped_by_hand_with_more_sun(suwon):
+    """"Before" a tenth less sun is the record with every solar term ×1.1, stepped by hand
+    (the observer's one-step path); "now" is the record as it is."""
+    theta = true_theta(suwon)
+    model, steps = _record(suwon, theta)
+    s = solar_energy_at_stake(model, steps, theta, -0.1)
+    assert s.j_now_kwh == pytest.approx(_by_hand(model, steps, theta), rel=1e-6)
+    assert s.j_before_kwh == pytest.approx(_by_hand(model, _sun_times(steps, 1.1), theta),
+                                           rel=1e-6)
+
+
+def test_in_heating_lost_sun_costs_no_more_than_the_sun_the_facade_lost(suwon):
+    """A winter morning (heating throughout): a tenth less sun costs heat, and at most the
+    tenth of what the façade took (absorbed in its layers, transmitted, and the daylight
+    benefit): the room cannot gain more from the sun than the façade received."""
+    theta = true_theta(suwon)
+    model, steps = _record(suwon, theta)
+    assert all(is_heating(model.cfg.control, float(t)) for t in steps.inputs.t_out_k)
+    s = solar_energy_at_stake(model, steps, theta, -0.1)
+    area_m2 = suwon.facade.width_m * suwon.facade.glazed_height_m
+    inp = steps.inputs
+    taken_j = ((np.asarray(inp.sources).sum(axis=1) + np.asarray(inp.q_trans_wm2)) * area_m2
+               + np.asarray(inp.q_da_w)).sum() * steps.step_s
+    lost_kwh = s.j_now_kwh - s.j_before_kwh
+    assert 0.0 < lost_kwh <= 0.1 * taken_j / 3.6e6

@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import sqlite3
+import types
 from collections.abc import Callable
 from pathlib import Path
 
@@ -19,6 +20,7 @@ import numpy as np
 import pytest
 
 from dsfd.config import load_panel
+from dsfd.control.stake import EnergyAtStake
 from dsfd.daemon.findings import (
     PARAMETER_EVERY_S,
     PARAMETER_MIN_DAYS,
@@ -291,8 +293,9 @@ def test_a_coefficient_moved_in_the_sunlit_windows_alone_is_told_as_a_change_of_
         assert f == found[0]
         return
     assert (f.kind, f.subject) == ("solar_gain_shift", DIRT_OR_LOUVER)
-    head, dark, lit = f.evidence
+    head, dark, lit, solar = f.evidence
     assert head == found[0].evidence[0] and dark.signal.endswith(":dark")
+    assert solar.shift == pytest.approx(-0.04)  # the daily factor, -0.03 before
     assert abs(dark.shift) < 0.15 and lit.shift == pytest.approx(math.log(2.0), abs=0.25)
     assert "less of the sun" in f.action and "clean it" in f.action
 
@@ -387,22 +390,26 @@ def test_a_failing_daylight_split_is_counted_and_leaves_the_parameter_finding_as
         ("parameter_shift", "parameter:h_ca4")]
 
 
-def test_a_coefficient_told_as_the_suns_keeps_the_energy_at_stake_of_its_move(
-        tmp_path, monkeypatch):
-    """The told finding is still the coefficient's move, so the stake the daemon costs for
-    it (dsfd.daemon.stake; its figures are tested against dsfd export in test_run_summary,
-    and replaced by a fixed one here: the synthetic store holds no week of cycles) ends its
-    action and its evidence, after the two halves."""
+def test_a_coefficient_told_as_the_suns_is_costed_as_the_sun_it_lost(tmp_path, monkeypatch):
+    """Told as the sun's, the finding's energy at stake is the sun's: the stored week costed
+    with the share of the sun it lost given back (dsfd.daemon.stake; its figures are tested
+    against dsfd export in test_run_summary, and replaced here by one that reports what it
+    was asked: the synthetic store holds no week of cycles). It ends the action and the
+    evidence, after the halves and the daily factor."""
     import dsfd.daemon.stake as stake
 
-    def fixed_stake(conn, f, now_s, *, panel, steps):
-        ev = Evidence(signal=stake.STAKE_SIGNAL, shift=1.25, shift_sd=math.nan,
-                      unit="kWh/week", since_s=now_s, statistic=math.nan, threshold=math.nan)
-        return dataclasses.replace(f, evidence=(*f.evidence, ev),
-                                   action=f.action + "; costs 1.25 kWh a week")
+    asked = []
 
-    monkeypatch.setattr(stake, "stake_record", lambda panel, state_dir, now_s: "week")
-    monkeypatch.setattr(stake, "with_stake", fixed_stake)
+    def reported_stake(model, steps, theta, share_change):
+        asked.append(share_change)
+        return EnergyAtStake(j_before_kwh=0.0, j_now_kwh=1.25 / 7, days=1.0,
+                             per_week_kwh=1.25)
+
+    week = types.SimpleNamespace(step_s=60.0)  # what the replaced costing is given
+    monkeypatch.setattr(stake, "stake_record", lambda panel, state_dir, now_s: week)
+    monkeypatch.setattr(stake, "LumpedModel", lambda cfg: None)
+    monkeypatch.setattr(stake, "model_config", lambda panel, step_s: None)
+    monkeypatch.setattr(stake, "solar_energy_at_stake", reported_stake)
     db = _parameter_history(tmp_path, shift={"h_ca4": math.log(2.0)}, shift_where=_sunlit)
     stage = FindingsStage(db, run_id=lambda: 1, panel=PANEL)
     stage.solar = _KnownSolarDays(PANEL, tmp_path)
@@ -415,6 +422,7 @@ def test_a_coefficient_told_as_the_suns_keeps_the_energy_at_stake_of_its_move(
     assert (f.kind, f.subject) == ("solar_gain_shift", DIRT_OR_LOUVER)
     assert [e.signal for e in f.evidence] == [
         "parameter:h_ca4", "parameter:h_ca4:dark", "parameter:h_ca4:sunlit",
-        stake.STAKE_SIGNAL]
-    assert "less of the sun" in f.action and f.action.endswith("; costs 1.25 kWh a week")
-    assert stage.stakes.costings == 1
+        "solar_response", stake.STAKE_SIGNAL]
+    assert asked == [pytest.approx(-0.04)] and f.evidence[-1].shift == 1.25
+    assert "less of the sun" in f.action and f.action.endswith(
+        "the change costs about 1.25 kWh a week (the model's J, Eq. 4/5)")

@@ -19,12 +19,12 @@ import pytest
 
 from dsfd.config import load_panel
 from dsfd.config.panel import PARAMETER_NAMES
-from dsfd.control.stake import energy_at_stake
+from dsfd.control.stake import energy_at_stake, solar_energy_at_stake
 from dsfd.daemon.stake import stake_record, with_stake
 from dsfd.daemon.summary import REGIME_NAMES
 from dsfd.estimation.diagnostics import Evidence, Finding
 from dsfd.estimation.params import FIT_NAMES
-from dsfd.estimation.stepdata import model_config, step_data
+from dsfd.estimation.stepdata import StepData, model_config, step_data
 from dsfd.physics.model import LumpedModel
 from dsfd.storage.measured_csv import read_measured
 from dsfd.storage.schema import PARAMETER_SD_COLUMNS
@@ -124,16 +124,7 @@ def test_a_parameter_finding_on_the_stored_run_gets_the_energy_at_stake(run, tmp
     assert stake.signal == "energy_at_stake" and stake.unit == "kWh/week"
     assert "kWh a week" in costed.action and costed.action.startswith(f.action)
     # the same by another path
-    out = tmp_path / "export.csv"
-    done = subprocess.run(dsfd_command("export", "--state-dir", str(state), "--out", str(out)),
-                          cwd=ROOT, capture_output=True, text=True, timeout=120, check=False)
-    assert done.returncode == 0, done.stderr
-    steps = step_data(cfg, read_measured(out))
-    names = ", ".join(n for n in FIT_NAMES if not n.startswith("q_"))
-    (*now_theta, other), = query(db, f"SELECT {names}, other FROM parameters "
-                                     "ORDER BY time_s DESC LIMIT 1")
-    q = json.loads(other)
-    theta_now = np.array([*now_theta, *(q[n] for n in FIT_NAMES if n.startswith("q_"))])
+    steps, theta_now = _exported(cfg, state, tmp_path)
     (f_prior,), = query(db, "SELECT f FROM parameters WHERE time_s = ?", t_prior)
     theta_before = theta_now.copy()
     theta_before[FIT_NAMES.index("f")] = f_prior
@@ -141,3 +132,43 @@ def test_a_parameter_finding_on_the_stored_run_gets_the_energy_at_stake(run, tmp
     ref = energy_at_stake(LumpedModel(model_config(cfg, steps.step_s)), steps, theta_before,
                           theta_now)
     assert stake.shift == pytest.approx(ref.per_week_kwh, rel=1e-6, abs=1e-9)
+
+
+def _exported(cfg, state: Path, tmp_path: Path) -> tuple[StepData, np.ndarray]:
+    """The run's steps as ``dsfd export`` writes them, and the last stored fit vector read
+    from the parameters table by hand."""
+    out = tmp_path / "export.csv"
+    done = subprocess.run(dsfd_command("export", "--state-dir", str(state), "--out", str(out)),
+                          cwd=ROOT, capture_output=True, text=True, timeout=120, check=False)
+    assert done.returncode == 0, done.stderr
+    names = ", ".join(n for n in FIT_NAMES if not n.startswith("q_"))
+    (*now_theta, other), = query(state / "timeseries.sqlite",
+                                 f"SELECT {names}, other FROM parameters "
+                                 "ORDER BY time_s DESC LIMIT 1")
+    q = json.loads(other)
+    theta = np.array([*now_theta, *(q[n] for n in FIT_NAMES if n.startswith("q_"))])
+    return step_data(cfg, read_measured(out)), theta
+
+
+def test_a_solar_finding_on_the_stored_run_gets_the_energy_of_the_sun_it_lost(run, tmp_path
+                                                                              ) -> None:
+    """Dirt that took a tenth of the sun, on the stored winter morning: the daemon's stake
+    equals the solar stake of what ``dsfd export`` writes with the last θ, and it costs (in
+    heating, the sun lost is heat the room no longer gains)."""
+    panel_path, state, _ = run
+    cfg = load_panel(panel_path)
+    db = state / "timeseries.sqlite"
+    (t0, now_s), = query(db, "SELECT MIN(time_s), MAX(time_s) FROM decisions")
+    ev = Evidence(signal="solar_response", shift=-0.1, shift_sd=5.0, unit="1", since_s=t0,
+                  statistic=6.0, threshold=5.0)
+    f = Finding(kind="solar_gain_shift", confidence=0.6, start_s=t0, detected_s=now_s,
+                evidence=(ev,), subject="exterior glass", action="clean the exterior glass")
+    with sqlite3.connect(db) as conn:
+        costed = with_stake(conn, f, now_s, panel=cfg, steps=stake_record(cfg, state, now_s))
+    assert [e.signal for e in costed.evidence] == ["solar_response", "energy_at_stake"]
+    assert "the change costs about" in costed.action
+    steps, theta_now = _exported(cfg, state, tmp_path)
+    ref = solar_energy_at_stake(LumpedModel(model_config(cfg, steps.step_s)), steps,
+                                theta_now, -0.1)
+    assert costed.evidence[1].shift == pytest.approx(ref.per_week_kwh, rel=1e-6)
+    assert ref.per_week_kwh > 0

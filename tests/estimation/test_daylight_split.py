@@ -96,11 +96,8 @@ def test_a_clean_history_is_neither_and_a_half_without_days_is_not_judged():
 def _finding() -> Finding:
     head = Evidence(signal="parameter:h_ca4", shift=0.5, shift_sd=4.0, unit="log",
                     since_s=MIDNIGHT, statistic=6.0, threshold=5.0)
-    stake = Evidence(signal="energy_at_stake", shift=1.2, shift_sd=math.nan,
-                     unit="kWh/week", since_s=MIDNIGHT, statistic=math.nan,
-                     threshold=math.nan)
     return Finding(kind="parameter_shift", confidence=0.6, start_s=MIDNIGHT,
-                   detected_s=MIDNIGHT + DAY, evidence=(head, stake), action="a failed seal")
+                   detected_s=MIDNIGHT + DAY, evidence=(head,), action="a failed seal")
 
 
 @pytest.mark.parametrize(("b_shift", "subject", "words"),
@@ -112,7 +109,8 @@ def test_the_told_finding_keeps_its_evidence_and_takes_its_direction_from_the_da
     f = as_solar_finding(_finding(), split, factor_shift=b_shift)
     assert (f.kind, f.subject) == ("solar_gain_shift", subject)
     assert [e.signal for e in f.evidence] == ["parameter:h_ca4", "parameter:h_ca4:dark",
-                                             "parameter:h_ca4:sunlit", "energy_at_stake"]
+                                             "parameter:h_ca4:sunlit", "solar_response"]
+    assert f.evidence[-1].shift == b_shift  # what its energy at stake is costed from
     assert f.start_s == MIDNIGHT and f.confidence == 0.6
     assert "×2.00 in the hours with sun and ×1.02 at night" in f.action and words in f.action
 
