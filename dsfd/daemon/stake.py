@@ -129,9 +129,13 @@ def with_stake(conn: sqlite3.Connection, f: Finding, now_s: float, *, panel: Pan
     ev = Evidence(signal=STAKE_SIGNAL, shift=s.per_week_kwh, shift_sd=math.nan,
                   unit="kWh/week", since_s=now_s - s.days * 86400.0, statistic=math.nan,
                   threshold=math.nan)
-    verb = "costs" if s.per_week_kwh >= 0 else "saves"
-    note = (f"; over the last {s.days:.1f} days' weather and commands the change {verb} about "
-            f"{abs(s.per_week_kwh):.2f} kWh a week (the model's J, Eq. 4/5)")
+    if abs(s.per_week_kwh) < 0.005:  # what would print as "about 0.00"
+        what = "moves the cost by less than 0.01 kWh a week"
+    else:
+        verb = "costs" if s.per_week_kwh >= 0 else "saves"
+        what = f"{verb} about {abs(s.per_week_kwh):.2f} kWh a week"
+    note = (f"; over the last {s.days:.1f} days' weather and commands the change {what} "
+            "(the model's J, Eq. 4/5)")
     return dataclasses.replace(f, evidence=(*f.evidence, ev), action=f.action + note)
 
 

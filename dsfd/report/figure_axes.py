@@ -35,7 +35,8 @@ class FindingAxes:
 
     def local(self, time_s: np.ndarray | float) -> np.ndarray:
         t = np.asarray(time_s, float) + self.offset_h * 3600.0
-        return (t * 1e3).astype("int64").astype("datetime64[ms]")
+        with np.errstate(invalid="ignore"):  # NaN (no value) casts to NaT, which is not drawn
+            return (t * 1e3).astype("int64").astype("datetime64[ms]")
 
     def setup(self, ax: Axes, *, label: bool) -> None:
         locator = AutoDateLocator(minticks=3, maxticks=8)

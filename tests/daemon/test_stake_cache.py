@@ -63,3 +63,16 @@ def test_a_finding_is_costed_when_new_and_every_six_hours_and_keeps_its_figure(c
     # nothing costed, no week read
     cache.apply(None, [q], 15 * 3600.0)
     assert counted["week"] == 4
+
+
+@pytest.mark.parametrize(("per_week", "words"), [
+    (1.234, "the change costs about 1.23 kWh a week"),
+    (-0.2, "the change saves about 0.20 kWh a week"),
+    (0.0013, "the change moves the cost by less than 0.01 kWh a week")])
+def test_the_stake_sentence_says_cost_or_saving_and_no_false_zero(monkeypatch, per_week,
+                                                                   words):
+    """A stake too small for two decimals is said to be small, not "about 0.00"."""
+    monkeypatch.setattr(stake, "_stake", lambda *a: stake.EnergyAtStake(
+        j_before_kwh=0.0, j_now_kwh=per_week, days=7.0, per_week_kwh=per_week))
+    f = stake.with_stake(None, _finding("f"), 0.0, panel=None, steps="week")
+    assert f.evidence[-1].shift == per_week and words in f.action
