@@ -291,7 +291,10 @@ def bench_closed_loop_seeds(cfg: PanelConfig, series: WeatherSeries, *, seeds: S
             if on_figures is not None:
                 on_figures({**done, **{f"seed{seed}.{k}": v for k, v in part.items()}})
 
-        part = bench_closed_loop(cfg, series, seed=seed, on_figures=hand_over, **options)
+        progress = options.get("progress")
+        seed_options = options if progress is None else {
+            **options, "progress": lambda msg, seed=seed, say=progress: say(f"seed {seed}: {msg}")}
+        part = bench_closed_loop(cfg, series, seed=seed, on_figures=hand_over, **seed_options)
         fig.update({f"seed{seed}.{k}": v for k, v in part.items()})
     return fig
 

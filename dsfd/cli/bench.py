@@ -144,6 +144,9 @@ def _bench_closed_loop(args: argparse.Namespace) -> dict[str, float]:
     else:
         seeds = (range(args.seed, args.seed + args.seeds) if isinstance(args.seeds, int)
                  else args.seeds)
+        counted = (f" (--seeds {args.seeds} is a count from --seed {args.seed}; name seeds as a "
+                   "list, e.g. 1,2,3, or one as --seed N)") if isinstance(args.seeds, int) else ""
+        options["progress"](f"closed loop: seed(s) {', '.join(map(str, seeds))}{counted}")
         figures = bench_closed_loop_seeds(cfg, series, seeds=tuple(seeds), **options)
         print(share_table(figures))
     print()

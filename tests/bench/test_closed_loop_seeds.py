@@ -67,6 +67,22 @@ def test_the_cli_prints_the_share_per_case_and_seed(tmp_path):
     assert "seed 1" in header and "seed 2" in header and "mean" in header
     assert any(line.startswith("clear-heating") for line in table)
     assert len(json.loads(cache.read_text())["entries"]) == 2
+    assert "closed loop: seed(s) 1, 2\n" in proc.stderr
+    assert "seed 2: clear-heating: mpc J" in proc.stderr
+
+
+def test_a_seed_count_says_which_seeds_it_runs_and_how_to_name_one(tmp_path):
+    """``--seeds 1`` is one seed counted from ``--seed`` (0), not seed 1: the bench says so
+    before it starts (a plant-oracle day ran on seed 0 that way, when seed 1 was meant)."""
+    proc = subprocess.run([sys.executable, "-m", "dsfd", "bench", "closed-loop", "--config",
+                           str(PANEL), "--days", "0.003", "--case", "clear-heating",
+                           "--controllers", "rule", "--seeds", "1"],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    first = proc.stderr.splitlines()[0]
+    assert first == ("closed loop: seed(s) 0 (--seeds 1 is a count from --seed 0; name seeds "
+                     "as a list, e.g. 1,2,3, or one as --seed N)")
+    assert "seed 0: clear-heating: rule J" in proc.stderr
 
 
 def test_a_seed_list_is_for_the_closed_loop_only():
