@@ -370,7 +370,7 @@ class FindingsStage:
                 judged.add("solar_gain_shift")
         if self.solar is not None:
             found = self._by_daylight(conn, found, judged, now_s)
-        if self.stakes is not None:  # after the split: a told finding keeps its stake
+        if self.stakes is not None:  # after the split: a told finding is costed as the sun's
             found = self.stakes.apply(conn, found, now_s)
         for name, kind in (("residual", "residual_shift"), ("night", "pane_offset_shift"),
                            ("parameter", "parameter_shift"),

@@ -106,9 +106,10 @@ def _stake(conn: sqlite3.Connection, f: Finding, now_s: float, panel: PanelConfi
         return None
     now = theta_at(conn, now_s)
     model = LumpedModel(model_config(panel, steps.step_s))
-    share = _solar_share(f) if f.kind == "solar_gain_shift" else None
-    if share is not None:
-        return None if now is None else solar_energy_at_stake(model, steps, now, share)
+    if f.kind == "solar_gain_shift":  # costed: it has a share
+        share = _solar_share(f)
+        return None if now is None or share is None else solar_energy_at_stake(
+            model, steps, now, share)
     before = theta_at(conn, f.start_s, before=True)
     if now is None or before is None:
         return None
