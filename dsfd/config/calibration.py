@@ -27,6 +27,7 @@ YAML shape (every key optional; the defaults suit a 1-minute controller cycle)::
       innovation_smoothing_s: [300, 1800, 1800, 300]  # ... through a low-pass per node x1..x4
       broyden_updates: 1          # Broyden Jacobian updates between finite differences
       identifiability_sd_ratio: 0.5  # < 1: a parameter moves only where the window determines it
+      c_follows_f: true           # c keeps step with f while no window has a diagonal regime
       measurement_gain: [1, 0.3, 0.3, 1, 1]  # state update: weight of a reading of x1..x5
       reading_offset_tracking_s: [0, 0, 0, 120, 120]  # per-regime reading offsets of x1..x5
       reading_offset_memory_s: 3600   # ... decay of a regime's offsets while it is not applied
@@ -113,6 +114,11 @@ class Calibration:
         "(default) kept every parameter off its bounds on the README dry run and on both "
         "plants of dsfd bench identify; 1 lets every excited parameter move (the paper's fit)",
         unit="1", gt=0, le=1)
+    c_follows_f: bool = setting(
+        True, doc="While a window has no diagonal regime (5-8) but f moves, c moves with it "
+        "as the diagonal path's orifice law does (c ∝ 1/√(K_in + K_out), the cavity's share "
+        "of K from f): an unexcited c keeps its last ratio to the other paths instead of its "
+        "default. False holds c where it was (the paper's fit; docs/model.md#c-follows-f)")
     identifiability_always_fit: tuple[str, ...] = setting(
         ("f", "c"),
         doc="Parameters the identifiability test never holds: fitted whenever the window "

@@ -26,9 +26,17 @@ from dsfd.config.calibration import Calibration
 from dsfd.estimation.fit import FitResult, fit_staged, fit_window
 from dsfd.estimation.objective import WindowProblem, window_problem
 from dsfd.estimation.observer import observe, observer_step
-from dsfd.estimation.params import FIT_NAMES, I_Q, N_PARAMS, ParameterSpace, full_vector
+from dsfd.estimation.params import (
+    FIT_NAMES,
+    I_Q,
+    N_PARAMS,
+    Param,
+    ParameterSpace,
+    full_vector,
+)
 from dsfd.estimation.state import CalibrationState
 from dsfd.estimation.stepdata import StepData
+from dsfd.physics.airflow import AirflowGeometry, diagonal_path_resistance
 from dsfd.physics.model import LumpedModel
 
 
@@ -64,6 +72,47 @@ def make_problem(model: LumpedModel, steps: StepData, x_hat: np.ndarray, x_pred:
         velocity_scale_ms=settings.velocity_scale_ms,
         spike_threshold_k=settings.spike_threshold_k,
         start_smoothing=settings.smoothing_samples(steps.step_s))
+
+
+def c_following_f(theta_before: np.ndarray, theta_after: np.ndarray, free: np.ndarray,
+                  space: ParameterSpace, geom: AirflowGeometry) -> np.ndarray:
+    """ϑ after a fit, with an unfitted c moved as f moved (docs/model.md#c-follows-f).
+
+    Parameters
+    ----------
+    theta_before, theta_after : array (13,)
+        The estimate before the fit and after it.
+    free : array (13,), bool
+        What the fit could move.
+    space : ParameterSpace
+    geom : AirflowGeometry
+        The panel's openings.
+
+    Returns
+    -------
+    ndarray (13,)
+        ``theta_after``, with c ← c·mean_p √(K_p(f_before) / K_p(f_after)) over the diagonal
+        paths p present when f was free and c not (clipped into c's bounds).
+
+    Notes
+    -----
+    A diagonal path is its two dampers and the cavity in series, like the orifice paths
+    whose loss f measures (docs/model.md#openings): at one pascal its conductance is
+    √(2/(ρ K)), K = K_in + K_out the path's series loss. c's power law stands for that path
+    ([ENG] matched at 1 Pa), so a change of f that no diagonal window has told c about
+    changes c by the ratio of the two conductances.
+    """
+    if free[Param.C] or not free[Param.F] or space.fixed[Param.C]:
+        return theta_after
+    k = diagonal_path_resistance(np.array([theta_before[Param.F], theta_after[Param.F]]), geom)
+    present = np.all(np.isfinite(k), axis=0)
+    if not present.any():
+        return theta_after
+    ratio = float(np.mean(np.sqrt(k[0, present] / k[1, present])))
+    theta = theta_after.copy()
+    theta[Param.C] = np.clip(theta[Param.C] * ratio, space.lower[Param.C],
+                             space.upper[Param.C])
+    return theta
 
 
 #: Rounds of the staged fit: an on-line update starts from the last estimate, the off-line
@@ -168,8 +217,11 @@ class OnlineCalibrator:
         if not fit.success or not np.all(np.isfinite(fit.theta)):
             self.state = dataclasses.replace(st, failed_updates=st.failed_updates + 1)
             return UpdateReport(self.state, fit, f"fit failed: {fit.message}")
+        theta = np.where(fit.free, self.space.clip(fit.theta), st.theta)
+        if cfg.c_follows_f:
+            theta = c_following_f(st.theta, theta, fit.free, self.space, self.model.geom)
         self.state = dataclasses.replace(
-            st, theta=np.where(fit.free, self.space.clip(fit.theta), st.theta),
+            st, theta=theta,
             cov_z=fit.cov_z, last_update_s=now,
             updates=st.updates + 1, residuals_last=fit.n_residuals, cost_last=fit.cost,
             free_last=tuple(k for k, f in zip(FIT_NAMES, fit.free, strict=True) if f))
@@ -276,6 +328,8 @@ def offline_fit(model: LumpedModel, steps: StepData, settings: Calibration | Non
             max_nfev=max_nfev or settings.offline_max_nfev,
             adaptive_scales=settings.adaptive_scales, progress=progress)
         theta = np.where(fit.free, space.clip(fit.theta), space.default)
+        if settings.c_follows_f:
+            theta = c_following_f(space.default, theta, fit.free, space, model.geom)
     assert fit is not None
     state = dataclasses.replace(
         state, theta=theta, cov_z=fit.cov_z, last_update_s=float(steps.time_s[-1]),

@@ -279,6 +279,25 @@ def opening_resistance(or_: np.ndarray, f: np.ndarray, geom: AirflowGeometry) ->
     return damper + (np.asarray(f, float)[..., None] / (2.0 * geom.cavity_area_m2**2))
 
 
+#: The two diagonal paths (inlet, outlet) in their exhaust direction: regimes 5/8 and 6/7.
+DIAGONAL_PATHS = ((IB, ET), (IT, EB))
+
+
+def diagonal_path_resistance(f: np.ndarray | float, geom: AirflowGeometry) -> np.ndarray:
+    """Series loss coefficient K_in + K_out of each diagonal path at OR = 1 [1/m4]
+    (docs/model.md#c-follows-f).
+
+    Returns
+    -------
+    ndarray (..., 2), [1/m4]
+        The IB + ET path (regimes 5 and 8) and the IT + EB path (6 and 7); inf where an
+        opening is absent.
+    """
+    f = np.asarray(f, float)
+    k = opening_resistance(np.ones(f.shape), f, geom)
+    return np.stack([k[..., a] + k[..., b] for a, b in DIAGONAL_PATHS], axis=-1)
+
+
 def path_pressure(p_b: np.ndarray, z: np.ndarray, rho_c: np.ndarray, inlet: int,
                   outlet: int) -> np.ndarray:
     """Driving pressure of a two-opening path at zero flow, positive inlet → outlet [Pa].
