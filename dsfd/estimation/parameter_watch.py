@@ -110,12 +110,12 @@ _LESS_RESISTANCE = (
     "missing insect screen; a cavity anemometer reading high looks the same")
 
 
-def _cavity_face(surface: str, sensor: str) -> dict[int, str]:
+def _cavity_face(surface: str, sensor: str, *, risen_also: str = "") -> dict[int, str]:
     check = (f"check the sensors {sensor} and x5, and the cavity anemometer (the flow it "
              "reports sets the convection expected); this parameter alone cannot tell them "
              "apart")
     return {+1: f"{surface} and the cavity air exchange more heat at the measured cavity "
-                f"speed than before: {check}",
+                f"speed than before: {check}{risen_also}",
             -1: f"{surface} and the cavity air exchange less heat at the measured cavity "
                 f"speed than before: {check} (a sensor loose from its surface reads nearer "
                 "the air beside it)"}
@@ -152,7 +152,9 @@ PARAMETER_MEANING: dict[str, dict[int, str]] = {
             "A calmer spell does that (weather, not a fault); if the wind has not changed, "
             "check the exterior-pane sensor x1 (loose from the glass?) against the "
             "outdoor-air sensor (in the sun?) at night"},
-    "h_ca1": _cavity_face("the exterior glass", "x1"),
+    "h_ca1": _cavity_face("the exterior glass", "x1", risen_also=(
+        "; dirt on the exterior glass looks the same (the pane takes less sun than modelled, "
+        "which the fit can render only as more cooling)")),
     "h_ca2": {+1: _slats("more"), -1: _slats("less")},
     "h_ca3": _cavity_face("the inner glazing's cavity face", "x2"),
     "h_ca4": {

@@ -94,6 +94,10 @@ def test_causes_the_evidence_cannot_separate_are_named_together():
     assert "weather, not a fault" in PARAMETER_MEANING["h_out"][1]
     assert "anemometer" in PARAMETER_MEANING["f"][1]  # a reading low looks like a clog
     assert "cannot tell" in PARAMETER_MEANING["h_ca1"][-1]
+    # less sun absorbed in a dirty exterior pane reads as more cooling, never as less
+    for name in ("h_out", "h_ca1"):
+        assert "dirt" in PARAMETER_MEANING[name][1] and "dirt" not in PARAMETER_MEANING[name][-1]
+    assert "dirt" not in PARAMETER_MEANING["h_ca3"][1]
     assert "x4" in PARAMETER_MEANING["h_ca2"][1]
     # an unknown parameter still gets an action, naming it
     assert parameter_action("h_x9", side=1, shift=5.0, shift_sd=3.0, unit="W/m2").startswith(
