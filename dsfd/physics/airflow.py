@@ -280,7 +280,7 @@ def opening_resistance(or_: np.ndarray, f: np.ndarray, geom: AirflowGeometry) ->
 
 
 #: The two diagonal paths (inlet, outlet) in their exhaust direction: regimes 5/8 and 6/7.
-DIAGONAL_PATHS = ((IB, ET), (IT, EB))
+DIAGONAL_PATHS = tuple(PATHS[r][:2] for r in (5, 6))
 
 
 def diagonal_path_resistance(f: np.ndarray | float, geom: AirflowGeometry) -> np.ndarray:

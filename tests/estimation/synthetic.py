@@ -24,6 +24,13 @@ TRUE_FACTORS = np.array([1.4, 0.8, 1.3, 1.25, 0.9, 1.2, 1.5, 0.7, 1.0])
 TRUE_N = 0.65
 
 
+def suwon_diagonal_k(f: float) -> float:
+    """K_in + K_out of a Suwon diagonal path at OR = 1 by hand [1/m4]: two 0.25 m x 2 m
+    dampers (A = 0.5 m2, C_d 0.6) and the cavity (A_c = 0.25 m x 2 m), each opening
+    1/(C_d A)^2 + f/(2 A_c^2) (docs/model.md#c-follows-f)."""
+    return 2.0 / (0.6 * 0.5) ** 2 + 2.0 * f / (2.0 * 0.5**2)
+
+
 def with_calibration(cfg: PanelConfig, **changes) -> PanelConfig:
     """``cfg`` with the given ``calibration.*`` settings replaced."""
     return dataclasses.replace(cfg, calibration=dataclasses.replace(cfg.calibration, **changes))

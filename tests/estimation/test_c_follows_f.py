@@ -14,15 +14,7 @@ from dsfd.estimation.stepdata import model_config, step_data
 from dsfd.physics.airflow import IT, AirflowGeometry, diagonal_path_resistance
 from dsfd.physics.model import LumpedModel
 from tests.estimation.synthetic import lumped_record, true_theta, with_calibration
-
-#: The Suwon panel's dampers are 0.25 m x 2 m (A = 0.5 m2) with C_d 0.6, its cavity
-#: 0.25 m x 2 m (A_c = 0.5 m2): each opening's K is 1/(C_d A)^2 + f/(2 A_c^2).
-DAMPER_K = 1.0 / (0.6 * 0.5) ** 2
-
-
-def series_k(f: float) -> float:
-    """K_in + K_out of a Suwon diagonal path by hand [1/m4]."""
-    return 2.0 * DAMPER_K + 2.0 * f / (2.0 * 0.5**2)
+from tests.estimation.synthetic import suwon_diagonal_k as series_k
 
 
 def test_diagonal_path_resistance_is_two_dampers_and_the_cavity(suwon):

@@ -14,7 +14,12 @@ from dsfd.estimation.params import ParameterSpace
 from dsfd.estimation.stepdata import model_config, step_data
 from dsfd.measured import MeasuredData
 from dsfd.physics.model import LumpedModel
-from tests.estimation.synthetic import lumped_record, true_theta, with_calibration
+from tests.estimation.synthetic import (
+    lumped_record,
+    suwon_diagonal_k,
+    true_theta,
+    with_calibration,
+)
 
 
 @pytest.fixture(scope="module")
@@ -92,12 +97,9 @@ def test_estimates_stay_inside_the_bounds(suwon):
     c_n = [Param.C, Param.N]
     assert not fit.free[c_n].any()  # no regime 5-8 in the data: c, n not fitted
     assert state.theta[Param.N] == space.default[Param.N]
-    # c kept step with f (docs/model.md#c-follows-f): two 0.25 m x 2 m dampers with C_d 0.6
-    # and the cavity's f/A_c^2 in series, A_c = 0.25 m x 2 m.
-    def series_k(f: float) -> float:
-        return 2.0 / (0.6 * 0.5) ** 2 + f / 0.5**2
-    expected_c = space.default[Param.C] * np.sqrt(series_k(space.default[Param.F])
-                                                  / series_k(state.theta[Param.F]))
+    # c kept step with f (docs/model.md#c-follows-f), by the hand-computed path resistance
+    expected_c = space.default[Param.C] * np.sqrt(suwon_diagonal_k(space.default[Param.F])
+                                                  / suwon_diagonal_k(state.theta[Param.F]))
     assert state.theta[Param.C] == pytest.approx(expected_c, rel=1e-9)
 
 
