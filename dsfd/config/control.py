@@ -99,6 +99,14 @@ class Control:
         "The paper has none; without it the louver moved ~100 times a day for gains of "
         "milliwatt-hours. 0.1 Wh: 9 moves a day and 0.4 % less heat gain in the winter "
         "closed loop (RMIS, 4 days)", unit="Wh", ge=0)
+    heat_offsets: bool = setting(
+        False, doc="Roll the candidates out with the calibration's heat-flux offsets q_x1..q_x4 "
+        "(the state update and the report's predictions always use them). They carry the "
+        "lumped model's solar error, fitted in the sun and still in force at dusk: on the "
+        "mixed cooling day (seed 1) they put the model's supply air below the outdoor air "
+        "at 16:30 and the controller let warm cavity air in, 1.140 kWh against 1.016 without "
+        "them; on the clear cooling day (seed 2) and the mixed heating day (seed 1) they "
+        "changed J by 0.001 and 0.011 kWh (docs/model.md#heat-offsets)")
     time_budget_s: float = setting(
         20.0, doc="A decision taking longer than this falls back to the baseline", unit="s",
         gt=0, le=60)

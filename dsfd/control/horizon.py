@@ -56,7 +56,9 @@ class ControlProblem:
     heat_offsets_wm2 : ndarray (4,) or None, [W/m2]
         Calibrated heat-flux offsets on nodes x1..x4 (the self-calibration's input
         disturbance, :mod:`dsfd.estimation.params`), added to the absorbed short-wave so
-        that the horizon is predicted by the same model the state estimate comes from.
+        that the horizon is predicted by the same model the state estimate comes from; None
+        for none (the daemon's default, ``control.heat_offsets: false``,
+        docs/model.md#heat-offsets).
     occupied : ndarray (H,) of bool or None
         Whether each horizon step is occupied; the comfort limits bind the occupied steps
         (docs/model.md#comfort-constraints). None or all False: energy only.

@@ -309,7 +309,8 @@ class Controller:
                 problem = ControlProblem(
                     x0=estimate.x_k, forcing=forecast,
                     theta=self.calibration.theta, heating=heating,
-                    heat_offsets_wm2=self.calibration.offsets,
+                    heat_offsets_wm2=(self.calibration.offsets if self.cfg.control.heat_offsets
+                                      else None),
                     previous_phi_deg=None if current is None else current.phi_deg,
                     previous_afr=None if current is None else current.afr,
                     previous_or_pct=None if current is None else current.or_pct,

@@ -184,3 +184,29 @@ def test_a_fault_reaches_every_controllers_plant(suwon, rmis_raw, rmis):
     assert set(stuck.commands) == {loop}
     assert np.abs(clean.heat_j["q_air"]).sum() > 1e3
     np.testing.assert_array_equal(stuck.heat_j["q_air"], 0.0)
+
+
+@pytest.mark.parametrize("with_offsets", [False, True])
+def test_the_candidates_are_rolled_out_with_the_offsets_only_when_asked(
+        suwon, rmis_raw, rmis, monkeypatch, with_offsets):
+    # control.heat_offsets (docs/model.md#heat-offsets): the state update keeps the
+    # calibration's offsets either way; the optimiser's problem gets them only when asked
+    import dsfd.daemon.loop as loop
+    seen, problem = [], loop.ControlProblem
+
+    def recording(*args, **kw):
+        seen.append(kw["heat_offsets_wm2"])
+        return problem(*args, **kw)
+
+    monkeypatch.setattr(loop, "ControlProblem", recording)
+    cfg = dataclasses.replace(suwon, control=dataclasses.replace(suwon.control,
+                                                                 heat_offsets=with_offsets))
+    q = np.array([12.0, -3.0, 2.0, -40.0])
+    theta = np.concatenate([suwon.parameters.values("default"), q])
+    _run(cfg, rmis_raw, rmis, "mpc", hours=0.1, calibration="offline", offline_theta=theta)
+    assert seen
+    for offsets in seen:
+        if with_offsets:
+            np.testing.assert_array_equal(offsets, q)
+        else:
+            assert offsets is None
