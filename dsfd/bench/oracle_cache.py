@@ -39,12 +39,18 @@ ORACLE_VERSION = "2026-11-29 plant oracle within the comfort limits (issue 35)"
 #: not reach its commands; nor do the integrations. A calibration setting tried on ``mpc``
 #: thus keeps the oracle figures already computed.
 NOT_READ_BY_ORACLE = ("calibration", "mqtt", "bacnet")
+#: Settings within a section left out likewise: whether the optimiser's rollouts take the
+#: calibration's heat-flux offsets changes nothing for a stage whose offsets are zero.
+NOT_READ_BY_ORACLE_SETTINGS = {"control": ("heat_offsets",)}
 
 
 def config_digest(cfg: PanelConfig) -> str:
     """SHA-256 of the panel configuration's canonical JSON form without
-    :data:`NOT_READ_BY_ORACLE` (first 16 hex digits)."""
+    :data:`NOT_READ_BY_ORACLE` and :data:`NOT_READ_BY_ORACLE_SETTINGS` (first 16 hex
+    digits)."""
     doc = {k: v for k, v in dataclasses.asdict(cfg).items() if k not in NOT_READ_BY_ORACLE}
+    for section, names in NOT_READ_BY_ORACLE_SETTINGS.items():
+        doc[section] = {k: v for k, v in doc[section].items() if k not in names}
     text = json.dumps(doc, sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 

@@ -109,11 +109,14 @@ def test_a_file_that_is_no_oracle_cache_is_refused_naming_it(tmp_path):
 @pytest.mark.slow
 def test_a_calibration_setting_keeps_the_cached_oracle_because_the_oracle_never_reads_it(
         suwon, tmp_path):
-    """The digest leaves out ``calibration`` (NOT_READ_BY_ORACLE); checked by running the
-    plant oracle under two calibration settings: the same J."""
+    """The digest leaves out ``calibration`` and ``control.heat_offsets``
+    (NOT_READ_BY_ORACLE, NOT_READ_BY_ORACLE_SETTINGS); checked by running the plant oracle
+    under two such settings: the same J."""
     rmis_raw = load_weather("rmis-golden-2022-01")
-    tuned = dataclasses.replace(suwon, calibration=dataclasses.replace(
-        suwon.calibration, identifiability_sd_ratio=0.5, measurement_gain=(0.5,) * 5))
+    tuned = dataclasses.replace(
+        suwon, calibration=dataclasses.replace(
+            suwon.calibration, identifiability_sd_ratio=0.5, measurement_gain=(0.5,) * 5),
+        control=dataclasses.replace(suwon.control, heat_offsets=not suwon.control.heat_offsets))
     assert config_digest(tuned) == config_digest(suwon)
     runs = [bench_closed_loop(cfg, rmis_raw, seed=2, controllers=("plant-oracle",), **TINY)
             for cfg in (suwon, tuned)]
